@@ -1,0 +1,36 @@
+#include "analysis/point_cloud.hpp"
+
+namespace springscan::analysis {
+
+PointCloud transformed(const PointCloud& cloud, const Transform& T) {
+  PointCloud out = cloud;
+  const Mat3 R = T.linear();
+  for (auto& p : out.points) p = T * p;
+  for (auto& n : out.normals) n = R * n;
+  return out;
+}
+
+PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
+  PointCloud out;
+  out.points.reserve(indices.size());
+  for (auto i : indices) out.points.push_back(cloud.points[i]);
+  if (cloud.has_normals()) {
+    out.normals.reserve(indices.size());
+    for (auto i : indices) out.normals.push_back(cloud.normals[i]);
+  }
+  if (cloud.has_scalars()) {
+    out.scalars.reserve(indices.size());
+    for (auto i : indices) out.scalars.push_back(cloud.scalars[i]);
+  }
+  if (cloud.has_colors()) {
+    out.colors.reserve(indices.size());
+    for (auto i : indices) out.colors.push_back(cloud.colors[i]);
+  }
+  if (cloud.has_face_ids()) {
+    out.face_ids.reserve(indices.size());
+    for (auto i : indices) out.face_ids.push_back(cloud.face_ids[i]);
+  }
+  return out;
+}
+
+}  // namespace springscan::analysis

@@ -1,0 +1,51 @@
+// springscan: the command-line front of the inspection station (DESIGN.md).
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "cli/cli_common.hpp"
+#include "cli/commands.hpp"
+
+namespace springscan::cli {
+
+// One line per subcommand; the implementations live in cmd_<name>.cpp.
+int version_main(int argc, char** argv);
+
+namespace {
+
+const Command kCommands[] = {
+    {"version", "print the version", version_main},
+};
+
+void print_usage() {
+  std::cout << "usage: springscan COMMAND [options]   (springscan COMMAND --help for details)\n\n"
+               "commands:\n";
+  for (const auto& command : kCommands) {
+    std::string name = command.name;
+    name.resize(12, ' ');
+    std::cout << "  " << name << command.summary << '\n';
+  }
+}
+
+}  // namespace
+
+int version_main(int, char**) {
+  std::cout << "springscan " << SPRINGSCAN_VERSION << '\n';
+  return kExitOk;
+}
+
+}  // namespace springscan::cli
+
+int main(int argc, char** argv) {
+  using namespace springscan::cli;
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "help") == 0) {
+    print_usage();
+    return argc < 2 ? kExitUsage : kExitOk;
+  }
+  if (std::strcmp(argv[1], "--version") == 0) return version_main(argc, argv);
+  for (const auto& command : kCommands) {
+    if (std::strcmp(argv[1], command.name) == 0) return command.run(argc, argv);
+  }
+  std::cerr << "springscan: unknown command '" << argv[1] << "' (springscan --help lists them)\n";
+  return kExitUsage;
+}

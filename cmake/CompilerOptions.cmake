@@ -1,0 +1,17 @@
+# Warnings and sanitizers are set per target, never globally (STYLE.md section 1).
+function(springscan_set_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic -Wshadow
+                                           -Wnon-virtual-dtor -Wcast-align)
+  if(SPRINGSCAN_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+endfunction()
+
+# The sanitizer build instruments every target, including generated protobuf code, so it is
+# applied to the whole build through these two variables rather than per target.
+if(SPRINGSCAN_SANITIZE)
+  set(SPRINGSCAN_SANITIZER_FLAGS -fsanitize=address,undefined -fno-omit-frame-pointer
+                                 -fno-sanitize-recover=undefined)
+  add_compile_options(${SPRINGSCAN_SANITIZER_FLAGS})
+  add_link_options(${SPRINGSCAN_SANITIZER_FLAGS})
+endif()

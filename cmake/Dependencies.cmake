@@ -1,0 +1,25 @@
+# Every find_package of the project, imported targets only (STYLE.md section 1).
+# All of them are Debian 12 packages installed by scripts/install-deps.sh.
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(nanoflann REQUIRED)
+find_package(Threads REQUIRED)
+find_package(Protobuf REQUIRED)
+find_package(OpenCASCADE REQUIRED)
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
+pkg_check_modules(LIBMODBUS REQUIRED IMPORTED_TARGET libmodbus)
+pkg_check_modules(LIBSYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
+if(SPRINGSCAN_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+  include(GoogleTest)
+  pkg_check_modules(UMOCKDEV REQUIRED IMPORTED_TARGET umockdev-1.0)
+endif()
+if(SPRINGSCAN_BUILD_BENCHMARKS)
+  find_package(benchmark REQUIRED)
+endif()
+
+# OpenCASCADE's config exports plain library names; collect the ones analysis/cad_*.cpp uses.
+set(SPRINGSCAN_OCCT_LIBRARIES
+    TKernel TKMath TKG2d TKG3d TKGeomBase TKBRep TKGeomAlgo TKTopAlgo TKPrim TKShHealing
+    TKMesh TKBO TKBool TKFillet TKOffset TKXSBase TKIGES TKSTEP TKSTEPBase TKSTEPAttr
+    TKSTEP209)

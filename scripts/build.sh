@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Configures (once) and builds springscan incrementally.
+#   scripts/build.sh            Release build in build/
+#   scripts/build.sh sanitize   AddressSanitizer + UndefinedBehaviorSanitizer build in build-asan/
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+kind=${1:-release}
+case "$kind" in
+  release) dir="$root/build"; flags=(-DCMAKE_BUILD_TYPE=Release) ;;
+  sanitize) dir="$root/build-asan"
+            flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DSPRINGSCAN_SANITIZE=ON
+                   -DSPRINGSCAN_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "usage: scripts/build.sh [release|sanitize]" >&2; exit 2 ;;
+esac
+if [[ "${CI:-}" == true ]]; then flags+=(-DSPRINGSCAN_WERROR=ON); fi
+launcher=()
+if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+if [[ ! -f "$dir/CMakeCache.txt" ]]; then
+  cmake -S "$root" -B "$dir" -G Ninja "${flags[@]}" "${launcher[@]}" >/dev/null
+fi
+cmake --build "$dir" --parallel "$(nproc)"

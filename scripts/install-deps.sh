@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs springscan's Debian 12 build and test dependencies. Idempotent and quick when
+# everything is already present: it asks dpkg first and runs apt-get only for what is missing.
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config ccache git
+  libeigen3-dev libnanoflann-dev
+  libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
+  libocct-data-exchange-dev libtbb-dev
+  libprotobuf-dev protobuf-compiler
+  libusb-1.0-0-dev libmodbus-dev libsystemd-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  umockdev libumockdev-dev libglib2.0-dev
+)
+# Reference implementations and third-party peers used by tests and benchmarks.
+if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
+  packages+=(mbpoll python3-scipy python3-numpy)
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null || true)
+  [[ "$status" == "install ok installed" ]] || missing+=("$p")
+done
+if ((${#missing[@]} == 0)); then
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}" >&2
+sudo_cmd=()
+if [[ $(id -u) -ne 0 ]]; then sudo_cmd=(sudo); fi
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Runs every springscan test: installs what is missing, builds (Release, incremental), runs CTest.
+#   scripts/test.sh             the Release build
+#   scripts/test.sh sanitize    the same suite under ASan + UBSan
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+kind=${1:-release}
+"$root/scripts/install-deps.sh"
+"$root/scripts/build.sh" "$kind"
+dir="$root/build"; [[ "$kind" == sanitize ]] && dir="$root/build-asan"
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)" --timeout 600
