@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "analysis/expected.hpp"
+#include "analysis/point_cloud.hpp"
 
 namespace springscan::analysis {
 
@@ -56,6 +57,12 @@ struct Assignment {
 /// O(m^2 n) worst case, O(n) memory beyond the matrix. Errors: rows > cols, size mismatch,
 /// non-finite cost (named with its row and column).
 Expected<Assignment> solve_dense(const DenseCostMatrix& cost);
+
+/// The same solver on c_ij = |rows[i] - cols[j]|^2 (mm^2), computed on the fly: O(m + n)
+/// memory, so it also serves as the fallback for large point sets. Errors: more rows than
+/// columns, a non-finite coordinate.
+Expected<Assignment> solve_dense_points(const std::vector<Vec3>& rows,
+                                        const std::vector<Vec3>& cols);
 
 /// Successive shortest paths on a sparse graph: Dijkstra with a binary heap on reduced costs
 /// c_ij - u_i - v_j >= 0, one augmentation per row. O(m (E + n) log n) worst case; on

@@ -2,6 +2,7 @@
 // The search is the rectangular Jonker-Volgenant variant of D. F. Crouse, "On implementing 2D
 // rectangular assignment algorithms", IEEE TAES 52(4), 2016, Algorithm 1; the dual updates keep
 // v_j <= 0 and v_j = 0 on unused columns, which is what makes the rectangular certificate hold.
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -24,14 +25,20 @@ struct DenseWorkspace {
 
 // Warm start (Jonker-Volgenant "reduction transfer" reduced to rows): u_i = min_j c_ij keeps
 // every reduced cost >= 0 with v = 0; a row whose cheapest column is still free takes it.
-void row_reduction(const DenseCostMatrix& cost, Assignment& a) {
-  for (std::size_t i = 0; i < cost.rows; ++i) {
-    const double* row = &cost.values[i * cost.cols];
+template <class Costs>
+void row_reduction(const Costs& costs, Assignment& a) {
+  for (std::size_t i = 0; i < costs.rows(); ++i) {
+    const auto row = costs.row(i);
     std::size_t best = 0;
-    for (std::size_t j = 1; j < cost.cols; ++j) {
-      if (row[j] < row[best]) best = j;
+    double best_cost = row(0);
+    for (std::size_t j = 1; j < costs.cols(); ++j) {
+      const double c = row(j);
+      if (c < best_cost) {
+        best = j;
+        best_cost = c;
+      }
     }
-    a.u[i] = row[best];
+    a.u[i] = best_cost;
     if (a.col_to_row[best] < 0) {
       a.col_to_row[best] = static_cast<std::int32_t>(i);
       a.row_to_col[i] = static_cast<std::int32_t>(best);
@@ -42,9 +49,9 @@ void row_reduction(const DenseCostMatrix& cost, Assignment& a) {
 // One Dijkstra-like search from free row `start` over the dense graph (Crouse, Algorithm 1
 // lines 9-27), then the dual update and the augmentation. Returns false if no free column is
 // reachable (impossible for a finite dense matrix with rows <= cols).
-bool augment_from(const DenseCostMatrix& cost, std::int32_t start, Assignment& a,
-                  DenseWorkspace& w) {
-  const std::size_t n = cost.cols;
+template <class Costs>
+bool augment_from(const Costs& costs, std::int32_t start, Assignment& a, DenseWorkspace& w) {
+  const std::size_t n = costs.cols();
   w.dist.assign(n, kInf);
   w.remaining.resize(n);
   for (std::size_t k = 0; k < n; ++k) w.remaining[k] = static_cast<std::int32_t>(n - 1 - k);
@@ -57,13 +64,13 @@ bool augment_from(const DenseCostMatrix& cost, std::int32_t start, Assignment& a
   std::int32_t sink = -1;
   while (sink < 0) {
     w.visited_rows.push_back(i);
-    const double* row = &cost.values[static_cast<std::size_t>(i) * n];
+    const auto row = costs.row(static_cast<std::size_t>(i));
     const double base = min_val - a.u[static_cast<std::size_t>(i)];
     double lowest = kInf;
     std::size_t lowest_at = 0;
     for (std::size_t k = 0; k < num_remaining; ++k) {
       const auto j = static_cast<std::size_t>(w.remaining[k]);
-      const double r = base + row[j] - a.v[j];
+      const double r = base + row(j) - a.v[j];
       if (r < w.dist[j]) {
         w.pred[j] = i;
         w.dist[j] = r;
@@ -106,6 +113,77 @@ bool augment_from(const DenseCostMatrix& cost, std::int32_t start, Assignment& a
   return true;
 }
 
+// The problem's costs as rows of a matrix in memory.
+class MatrixCosts {
+ public:
+  explicit MatrixCosts(const DenseCostMatrix& m) : m_(m) {}
+  std::size_t rows() const { return m_.rows; }
+  std::size_t cols() const { return m_.cols; }
+  struct Row {
+    const double* values;
+    double operator()(std::size_t j) const { return values[j]; }
+  };
+  Row row(std::size_t i) const { return {&m_.values[i * m_.cols]}; }
+
+ private:
+  const DenseCostMatrix& m_;
+};
+
+// Squared distances computed on the fly from the column points, stored coordinate-wise so the
+// inner loop streams three arrays instead of a rows x cols matrix (O(n) memory).
+class PointCosts {
+ public:
+  PointCosts(const std::vector<Vec3>& rows, const std::vector<Vec3>& cols) : rows_(rows) {
+    for (int k = 0; k < 3; ++k) coords_[k].resize(cols.size());
+    for (std::size_t j = 0; j < cols.size(); ++j) {
+      for (int k = 0; k < 3; ++k) coords_[k][j] = cols[j][k];
+    }
+  }
+  std::size_t rows() const { return rows_.size(); }
+  std::size_t cols() const { return coords_[0].size(); }
+  struct Row {
+    double x, y, z;
+    const double *xs, *ys, *zs;
+    double operator()(std::size_t j) const {
+      const double dx = x - xs[j], dy = y - ys[j], dz = z - zs[j];
+      return dx * dx + dy * dy + dz * dz;
+    }
+  };
+  Row row(std::size_t i) const {
+    const Vec3& p = rows_[i];
+    return {p.x(), p.y(), p.z(), coords_[0].data(), coords_[1].data(), coords_[2].data()};
+  }
+
+ private:
+  const std::vector<Vec3>& rows_;
+  std::array<std::vector<double>, 3> coords_;
+};
+
+template <class Costs>
+Expected<Assignment> solve_with(const Costs& costs) {
+  Assignment a;
+  a.row_to_col.assign(costs.rows(), -1);
+  a.col_to_row.assign(costs.cols(), -1);
+  a.u.assign(costs.rows(), 0.0);
+  a.v.assign(costs.cols(), 0.0);
+  if (costs.rows() == 0) return a;
+
+  row_reduction(costs, a);
+  DenseWorkspace w;
+  w.pred.assign(costs.cols(), -1);
+  for (std::size_t i = 0; i < costs.rows(); ++i) {
+    if (a.row_to_col[i] >= 0) continue;
+    if (!augment_from(costs, static_cast<std::int32_t>(i), a, w)) {
+      return fail("dense assignment: no augmenting path from row " + std::to_string(i));
+    }
+    ++a.augmentations;
+  }
+  for (std::size_t i = 0; i < costs.rows(); ++i) {
+    a.total_cost += costs.row(i)(static_cast<std::size_t>(a.row_to_col[i]));
+  }
+  return a;
+}
+
 }  // namespace
 
 Expected<Assignment> solve_dense(const DenseCostMatrix& cost) {
@@ -123,27 +201,24 @@ Expected<Assignment> solve_dense(const DenseCostMatrix& cost) {
                   ", column " + std::to_string(k % cost.cols) + " is not finite");
     }
   }
-  Assignment a;
-  a.row_to_col.assign(cost.rows, -1);
-  a.col_to_row.assign(cost.cols, -1);
-  a.u.assign(cost.rows, 0.0);
-  a.v.assign(cost.cols, 0.0);
-  if (cost.rows == 0) return a;
+  return solve_with(MatrixCosts(cost));
+}
 
-  row_reduction(cost, a);
-  DenseWorkspace w;
-  w.pred.assign(cost.cols, -1);
-  for (std::size_t i = 0; i < cost.rows; ++i) {
-    if (a.row_to_col[i] >= 0) continue;
-    if (!augment_from(cost, static_cast<std::int32_t>(i), a, w)) {
-      return fail("dense assignment: no augmenting path from row " + std::to_string(i));
+Expected<Assignment> solve_dense_points(const std::vector<Vec3>& rows,
+                                        const std::vector<Vec3>& cols) {
+  if (rows.size() > cols.size()) {
+    return fail("dense assignment: " + std::to_string(rows.size()) + " row points > " +
+                std::to_string(cols.size()) + " column points (transpose the problem)");
+  }
+  for (const auto* set : {&rows, &cols}) {
+    for (std::size_t k = 0; k < set->size(); ++k) {
+      if (!(*set)[k].allFinite()) {
+        return fail(std::string("dense assignment: ") + (set == &rows ? "row" : "column") +
+                    " point " + std::to_string(k) + " is not finite");
+      }
     }
-    ++a.augmentations;
   }
-  for (std::size_t i = 0; i < cost.rows; ++i) {
-    a.total_cost += cost.at(i, static_cast<std::size_t>(a.row_to_col[i]));
-  }
-  return a;
+  return solve_with(PointCosts(rows, cols));
 }
 
 }  // namespace springscan::analysis
