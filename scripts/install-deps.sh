@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libnanoflann-dev
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libtbb-dev
-  libprotobuf-dev protobuf-compiler
+  libprotobuf-dev protobuf-compiler zlib1g-dev
   libusb-1.0-0-dev libmodbus-dev libsystemd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
@@ -16,6 +16,8 @@ packages=(
 # Reference implementations and third-party peers used by tests and benchmarks.
 if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
   packages+=(mbpoll python3-scipy python3-numpy)
+  # The HTML report is checked in a real browser (tests/report/browser_test.cpp).
+  packages+=(chromium)
 fi
 
 missing=()

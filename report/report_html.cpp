@@ -1,0 +1,151 @@
+#include "report/report_html.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "report/figures.hpp"
+#include "report/html_text.hpp"
+#include "report/plots.hpp"
+#include "report/report_sections.hpp"
+#include "report/report_style.hpp"
+
+namespace springscan::report {
+namespace {
+
+// The tolerance the colour map marks: the deviation stage's, else the verdict's.
+double tolerance_of(const v1::InspectionReport& report) {
+  if (report.deviation().tolerance_mm() > 0) return report.deviation().tolerance_mm();
+  const auto& verdict = report.settings().verdict();
+  return verdict.has_tolerance_mm() ? verdict.tolerance_mm() : 0.0;
+}
+
+// |deviation| drawn full blue or red: the setting, the scale deviation.ply was coloured with,
+// twice the tolerance (so the tolerance sits mid-scale), or the largest deviation.
+double color_scale_of(const v1::InspectionReport& report, const analysis::PointCloud& cloud,
+                      const ReportSettings& settings) {
+  if (settings.color_scale_mm > 0) return settings.color_scale_mm;
+  if (report.deviation().color_scale_mm() > 0) return report.deviation().color_scale_mm();
+  if (tolerance_of(report) > 0) return 2.0 * tolerance_of(report);
+  double largest = std::max(std::abs(report.deviation().min()), std::abs(report.deviation().max()));
+  for (double s : cloud.scalars)
+    if (std::isfinite(s)) largest = std::max(largest, std::abs(s));
+  return largest > 0 ? largest : 1.0;
+}
+
+analysis::Expected<std::string> deviation_section(const v1::InspectionReport& report,
+                                                  const DrawCloud& cloud, double scale_mm,
+                                                  const ReportSettings& settings) {
+  auto views = deviation_views_html(cloud, settings);
+  if (!views) return views.error();
+  return "<section id='deviation'><h2>Surface deviation</h2><div class='grid2'>" +
+         deviation_table(report.deviation()) +
+         "<div><p class='note'>Signed distance of each scan point to the CAD surface after the "
+         "global best fit, drawn from " + std::to_string(cloud.points.size()) +
+         " points of the scan. Green lies within the tolerance; blue is below the CAD surface "
+         "(against its outward normal), red above. A flange coloured blue at one end and red at "
+         "the other is turned: look at the bend table.</p></div></div>" +
+         "<div class='colorbar-wrap'>" + color_bar_svg(scale_mm, tolerance_of(report), 1000) +
+         "</div>" +
+         *views + "</section>";
+}
+
+analysis::Expected<std::string> bends_section(const v1::InspectionReport& report,
+                                              const DrawCloud& cloud,
+                                              const ReportSettings& settings) {
+  if (report.bends_size() == 0)
+    return std::string("<section id='bends' class='printbreak'><h2>Bends and springback</h2><p class='note'>"
+                       "No bends in this part.</p></section>");
+  auto figure = bends_figure_html(report, cloud, settings);
+  if (!figure) return figure.error();
+  return "<section id='bends' class='printbreak'><h2>Bends and springback</h2>" + bend_table(report) +
+         "<div class='grid2'>" + *figure + segment_table(report) + "</div></section>";
+}
+
+std::string global_fit_section(const v1::InspectionReport& report) {
+  const auto& registration = report.settings().registration();
+  ErrorPlotSettings plot;
+  if (registration.has_error_ratio_stop()) plot.ratio_stop = registration.error_ratio_stop();
+  return "<section id='fit' class='keep'><h2>Global best fit</h2><div class='grid2'>" +
+         global_fit_table(report) + reduction_table(report.reduction()) + "</div>" +
+         "<figure>" + error_progression_svg(
+                          {report.global_fit().error_history().begin(),
+                           report.global_fit().error_history().end()},
+                          plot) +
+         "<figcaption>Error progression of the ICP fit: E(i) and the quotient E(i)/E(i-1), "
+         "after the paper's Figure 6b. A quotient near 1 means further iterations no longer "
+         "improve the fit.</figcaption></figure></section>";
+}
+
+analysis::Expected<std::string> compensation_section(const v1::InspectionReport& report,
+                                                     const DrawCloud& cloud,
+                                                     const ReportSettings& settings) {
+  auto figure = compensation_figure_html(report, cloud, settings);
+  if (!figure) return figure.error();
+  return "<section id='compensation' class='keep printbreak'><h2>Deformation and compensation</h2>"
+         "<div class='grid2'>" + *figure + deformation_table(report) + "</div></section>";
+}
+
+}  // namespace
+
+analysis::Expected<std::string> render_report_html(const v1::InspectionReport& report,
+                                                   const analysis::PointCloud& deviation_cloud,
+                                                   const ReportSettings& settings) {
+  if (!deviation_cloud.attributes_consistent())
+    return analysis::fail("render_report_html: the deviation cloud's attributes disagree with "
+                          "its " + std::to_string(deviation_cloud.size()) + " points");
+  const double scale_mm = color_scale_of(report, deviation_cloud, settings);
+  const DrawCloud cloud = make_draw_cloud(deviation_cloud, scale_mm, settings);
+  auto deviation = deviation_section(report, cloud, scale_mm, settings);
+  if (!deviation) return deviation.error();
+  auto bends = bends_section(report, cloud, settings);
+  if (!bends) return bends.error();
+  auto compensation = compensation_section(report, cloud, settings);
+  if (!compensation) return compensation.error();
+
+  std::string html;
+  html.reserve(1 << 20);
+  html += "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>"
+          "<meta name='viewport' content='width=device-width, initial-scale=1'>"
+          "<title>Inspection report " + escape_html(report.input().part_id()) + "</title><style>";
+  html += report_css();
+  html += "</style></head><body>";
+  html += header_html(report);
+  html += *deviation + *bends + global_fit_section(report) + *compensation;
+  html += "<section id='timings' class='keep'><h2>Statistics and stage timings</h2>"
+          "<div class='grid2'>" + timings_table(report.timings_ms()) + input_table(report) +
+          "</div></section>";
+  html += warnings_html(report) + footer_html(report) + "</body></html>\n";
+  return html;
+}
+
+analysis::Expected<std::filesystem::path> write_report_html(
+    const std::filesystem::path& path, const v1::InspectionReport& report,
+    const analysis::PointCloud& deviation_cloud, const ReportSettings& settings) {
+  auto html = render_report_html(report, deviation_cloud, settings);
+  if (!html) return html.error();
+  std::filesystem::path temporary = path;
+  temporary += ".tmp";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out << *html;
+    out.close();
+    if (!out) return analysis::fail(temporary.string() + ": cannot write the HTML report");
+  }
+  std::error_code error;
+  std::filesystem::rename(temporary, path, error);
+  if (error) {
+    const std::string reason = error.message();
+    std::filesystem::remove(temporary, error);
+    return analysis::fail(path.string() + ": cannot move the HTML report into place: " + reason);
+  }
+  return path;
+}
+
+analysis::Expected<std::filesystem::path> write_report_html_in_dir(
+    const std::filesystem::path& dir, const v1::InspectionReport& report,
+    const analysis::PointCloud& deviation_cloud, const ReportSettings& settings) {
+  return write_report_html(dir / kReportHtmlName, report, deviation_cloud, settings);
+}
+
+}  // namespace springscan::report

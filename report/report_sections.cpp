@@ -1,0 +1,223 @@
+#include "report/report_sections.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "report/html_text.hpp"
+
+namespace springscan::report {
+namespace {
+
+// A two-column table of labels and values; both are plain text and get escaped here.
+std::string kv_table(const std::vector<std::pair<std::string, std::string>>& rows) {
+  std::string html = "<table class='kv'>";
+  for (const auto& [label, value] : rows)
+    html += "<tr><td>" + escape_html(label) + "</td><td class='num'>" + escape_html(value) +
+            "</td></tr>";
+  return html + "</table>";
+}
+
+std::string mm(double value, int decimals = 3) { return fixed(value, decimals) + " mm"; }
+std::string count(std::int64_t n) { return std::to_string(n); }
+std::string yes_no(bool value) { return value ? "yes" : "no"; }
+
+double bend_tolerance(const v1::InspectionReport& report, const v1::Bend& bend) {
+  if (bend.angle_tolerance_deg() > 0) return bend.angle_tolerance_deg();
+  const auto& verdict = report.settings().verdict();
+  return verdict.has_angle_tolerance_deg() ? verdict.angle_tolerance_deg() : 0.0;
+}
+
+std::string status_cell(const char* css, const char* word) {
+  return std::string("<td><span class='status ") + css + "'>" + word + "</span></td>";
+}
+
+}  // namespace
+
+std::string header_html(const v1::InspectionReport& report) {
+  const auto& input = report.input();
+  const bool pass = report.verdict().pass();
+  std::string html = "<header class='top'><div><h1>Springback inspection report</h1><div "
+                     "class='sub'>Part <b>" +
+                     escape_html(input.part_id().empty() ? "(unnamed)" : input.part_id()) +
+                     "</b> &middot; CAD " + escape_html(input.cad_file()) + "</div></div>";
+  html += "<div class='meta'>" + escape_html(report.created_utc()) + "<br>Station " +
+          escape_html(report.station().empty() ? "(offline)" : report.station()) + "<br>Job " +
+          std::to_string(report.job_id()) + " &middot; result " +
+          std::to_string(report.result_seq()) + "</div></header>";
+  html += std::string("<div class='banner ") + (pass ? "pass" : "fail") +
+          "' id='verdict'><div class='word'>" + (pass ? "PASS" : "FAIL") + "</div>";
+  if (report.verdict().reasons_size() == 0) {
+    html += std::string("<div class='none'>") +
+            (pass ? "All checks within tolerance." : "No reason recorded.") + "</div>";
+  } else {
+    html += "<ul class='reasons'>";
+    for (const auto& reason : report.verdict().reasons())
+      html += "<li>" + escape_html(reason) + "</li>";
+    html += "</ul>";
+  }
+  return html + "</div>";
+}
+
+std::string deviation_table(const v1::Deviation& d) {
+  return kv_table({{"Minimum (signed)", mm(d.min())},
+                   {"Maximum (signed)", mm(d.max())},
+                   {"Mean (signed)", mm(d.mean())},
+                   {"RMS", mm(d.rms())},
+                   {"95th percentile of |deviation|", mm(d.p95())},
+                   {"Out of tolerance", fixed(100.0 * d.fraction_out_of_tolerance(), 2) + " %"},
+                   {"Tolerance", "\u00b1" + mm(d.tolerance_mm())},
+                   {"Points", count(d.points())},
+                   {"Reference", d.reference().empty() ? "n/a" : d.reference()}});
+}
+
+std::string bend_table(const v1::InspectionReport& report) {
+  std::string html =
+      "<table class='bends'><tr><th>Bend</th><th class='num'>Nominal [\u00b0]</th>"
+      "<th class='num'>Measured [\u00b0]</th><th class='num'>Springback [\u00b0]</th>"
+      "<th class='num'>Tolerance [\u00b1\u00b0]</th><th class='num'>Radius [mm]</th>"
+      "<th class='num'>Flanges</th><th>Result</th></tr>";
+  for (const auto& bend : report.bends()) {
+    const bool measured = bend.measured();
+    const char* row = !measured ? "bend nm" : bend.pass() ? "bend ok" : "bend ng";
+    html += std::string("<tr class='") + row + "' id='bend-" + std::to_string(bend.id()) +
+            "'><td><b>B" + std::to_string(bend.id()) + "</b></td><td class='num'>" +
+            fixed(bend.nominal_angle_deg(), 2) + "</td><td class='num'>" +
+            (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") +
+            "</td><td class='num'>" +
+            (measured ? signed_fixed(bend.springback_deg(), 2) : "&mdash;") +
+            "</td><td class='num'>" + fixed(bend_tolerance(report, bend), 2) +
+            "</td><td class='num'>" + fixed(bend.radius_mm(), 1) + "</td><td class='num'>" +
+            std::to_string(bend.segment_a()) + " / " + std::to_string(bend.segment_b()) +
+            "</td>" +
+            (!measured      ? status_cell("nm", "NOT MEASURED")
+             : bend.pass() ? status_cell("ok", "PASS")
+                           : status_cell("ng", "FAIL")) +
+            "</tr>";
+  }
+  return html + "</table><p class='note'>Springback = nominal &minus; measured angle: positive "
+                "when the bend opened up.</p>";
+}
+
+std::string segment_table(const v1::InspectionReport& report) {
+  std::string html =
+      "<table class='segments'><tr><th>Flange</th><th class='num'>CAD faces</th>"
+      "<th class='num'>Points</th><th class='num'>Local fit RMS [mm]</th>"
+      "<th class='num'>Iterations</th><th>Converged</th></tr>";
+  for (const auto& segment : report.segments()) {
+    std::string faces;
+    for (int f : segment.cad_faces()) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
+    html += "<tr><td>S" + std::to_string(segment.id()) + "</td><td class='num'>" +
+            escape_html(faces) + "</td><td class='num'>" + count(segment.points()) +
+            "</td><td class='num'>" + fixed(segment.local_fit().rms(), 3) +
+            "</td><td class='num'>" + std::to_string(segment.local_fit().iterations()) +
+            "</td><td>" + yes_no(segment.local_fit().converged()) + "</td></tr>";
+  }
+  return html + "</table>";
+}
+
+std::string global_fit_table(const v1::InspectionReport& report) {
+  const auto& fit = report.global_fit();
+  std::string translation = "n/a", rotation = "n/a";
+  if (fit.transform_size() == 16) {
+    Eigen::Matrix4d T;
+    for (int i = 0; i < 16; ++i) T(i / 4, i % 4) = fit.transform(i);  // row-major (DESIGN.md)
+    const Eigen::AngleAxisd angle_axis(Eigen::Matrix3d(T.block<3, 3>(0, 0)));
+    // Appended piece by piece: "(" + std::string triggers a g++ 12 -Wrestrict false positive.
+    translation.assign(1, '(');
+    translation += fixed(T(0, 3), 2) + ", " + fixed(T(1, 3), 2) + ", " + fixed(T(2, 3), 2);
+    translation += ") mm";
+    rotation = fixed(angle_axis.angle() * 180.0 / std::numbers::pi, 3) + "\u00b0";
+  }
+  return kv_table({{"Method", fit.method().empty() ? "n/a" : fit.method()},
+                   {"Iterations", std::to_string(fit.iterations())},
+                   {"Converged", yes_no(fit.converged())},
+                   {"Stop reason", fit.stop_reason().empty() ? "n/a" : fit.stop_reason()},
+                   {"RMS initial", mm(fit.rms_initial())},
+                   {"RMS after PCA alignment", mm(fit.rms_after_pca())},
+                   {"RMS final", mm(fit.rms_final())},
+                   {"Inliers", count(fit.inliers())},
+                   {"Translation scan \u2192 CAD", translation},
+                   {"Rotation angle scan \u2192 CAD", rotation}});
+}
+
+std::string reduction_table(const v1::ReductionReport& r) {
+  return kv_table({{"Model points (in \u2192 reduced)",
+                    count(r.model_points_in()) + " \u2192 " + count(r.model_points_out())},
+                   {"Scan points (in \u2192 reduced)",
+                    count(r.scan_points_in()) + " \u2192 " + count(r.scan_points_out())},
+                   {"k-center radius w", mm(r.kcenter_radius_mm(), 2)},
+                   {"Covering radius, model", mm(r.model_covering_radius_mm(), 2)},
+                   {"Covering radius, scan", mm(r.scan_covering_radius_mm(), 2)}});
+}
+
+std::string deformation_table(const v1::InspectionReport& report) {
+  const auto& field = report.deformation_field();
+  double longest = 0.0, sum = 0.0;
+  for (const auto& c : report.compensation()) {
+    const double n = std::sqrt(c.vector().x() * c.vector().x() + c.vector().y() * c.vector().y() +
+                               c.vector().z() * c.vector().z());
+    longest = std::max(longest, n);
+    sum += n;
+  }
+  const int n = report.compensation_size();
+  return kv_table({{"Correspondence method", field.method().empty() ? "n/a" : field.method()},
+                   {"Correspondences", std::to_string(field.vectors_size())},
+                   {"Model / scan points matched",
+                    std::to_string(field.model_points()) + " / " +
+                        std::to_string(field.scan_points())},
+                   {"Coverage", fixed(100.0 * field.coverage(), 1) + " %"},
+                   {"Total cost (sum of squared distances)", fixed(field.total_cost(), 3) + " mm\u00b2"},
+                   {"Optimality certified", yes_no(field.optimality_certified())},
+                   {"Compensation vectors", std::to_string(n)},
+                   {"Largest |c|", mm(longest)},
+                   {"Mean |c|", n > 0 ? mm(sum / n) : "n/a"}});
+}
+
+std::string timings_table(const v1::Timings& t) {
+  const std::vector<std::pair<const char*, double>> stages = {
+      {"Load", t.load()},           {"Model sampling", t.model()},
+      {"Reduction", t.reduce()},    {"Global fit", t.global_fit()},
+      {"Deviation", t.deviation()}, {"Local fits", t.local_fits()},
+      {"Deformation", t.deformation()}, {"Report", t.report()}};
+  double longest = 1e-9;
+  for (const auto& s : stages) longest = std::max(longest, s.second);
+  std::string html = "<table class='timings'><tr><th>Stage</th><th class='num'>Time [ms]</th>"
+                     "<th></th></tr>";
+  for (const auto& [name, ms] : stages) {
+    const double width = std::clamp(ms / longest, 0.0, 1.0) * 160.0;
+    html += std::string("<tr><td>") + name + "</td><td class='num'>" + fixed(ms, 1) +
+            "</td><td><span class='bar' style='width:" + svg_number(width) +
+            "px'></span></td></tr>";
+  }
+  return html + "<tr><th>Total</th><th class='num'>" + fixed(t.total(), 1) +
+         "</th><th></th></tr></table>";
+}
+
+std::string input_table(const v1::InspectionReport& report) {
+  const auto& in = report.input();
+  return kv_table({{"CAD file", in.cad_file()},
+                   {"CAD SHA-256", in.cad_sha256().substr(0, 16)},
+                   {"CAD faces", std::to_string(in.cad_faces())},
+                   {"Model sample points", count(in.model_points())},
+                   {"Scan file", in.scan_file()},
+                   {"Scan points", count(in.scan_points())}});
+}
+
+std::string warnings_html(const v1::InspectionReport& report) {
+  if (report.warnings_size() == 0) return "";
+  std::string html = "<section id='warnings' class='keep'><h2>Warnings</h2><ul class='warnings'>";
+  for (const auto& w : report.warnings()) html += "<li>" + escape_html(w) + "</li>";
+  return html + "</ul></section>";
+}
+
+std::string footer_html(const v1::InspectionReport& report) {
+  return "<footer>springscan " + escape_html(report.software_version()) + " &middot; " +
+         escape_html(report.schema()) +
+         " &middot; distances in mm, angles in degrees, CAD coordinate frame</footer>";
+}
+
+}  // namespace springscan::report

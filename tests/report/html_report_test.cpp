@@ -1,0 +1,215 @@
+// The HTML report's structure: verdict, bend rows, escaping, no network references, embedded
+// pictures that decode, and the writer.
+#include "report/report_html.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "report/figures.hpp"
+#include "report/html_text.hpp"
+#include "report/plots.hpp"
+#include "tests/report/png_decode.hpp"
+#include "tests/report/report_fixture.hpp"
+
+namespace springscan::report {
+namespace {
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+// The text of the table row with id `bend-<id>`.
+std::string bend_row(const std::string& html, int id) {
+  const auto at = html.find("id='bend-" + std::to_string(id) + "'");
+  if (at == std::string::npos) return "";
+  return html.substr(at, html.find("</tr>", at) - at);
+}
+
+class HtmlReport : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    fixture_ = new testing::Fixture(testing::make_fixture(20'000));
+    auto html = render_report_html(fixture_->report, fixture_->cloud);
+    ASSERT_TRUE(html.ok()) << html.message();
+    html_ = new std::string(*html);
+  }
+  static void TearDownTestSuite() {
+    delete fixture_;
+    delete html_;
+  }
+  static testing::Fixture* fixture_;
+  static std::string* html_;
+};
+testing::Fixture* HtmlReport::fixture_ = nullptr;
+std::string* HtmlReport::html_ = nullptr;
+
+TEST_F(HtmlReport, StartsWithTheVerdictAndItsReasons) {
+  const auto banner = html_->find("class='banner fail'");
+  ASSERT_NE(banner, std::string::npos);
+  EXPECT_LT(banner, html_->find("id='deviation'"));  // at the top, before any section
+  EXPECT_NE(html_->find(">FAIL<", banner), std::string::npos);
+  EXPECT_NE(html_->find("bend B2 springback +2.40\u00b0 exceeds"), std::string::npos);
+  EXPECT_EQ(html_->find("class='banner pass'"), std::string::npos);
+}
+
+TEST_F(HtmlReport, HasOneRowPerBendWithItsNumbersAndResult) {
+  EXPECT_EQ(count_of(*html_, "<tr class='bend "), 4u);
+  const std::string b1 = bend_row(*html_, 1), b2 = bend_row(*html_, 2), b4 = bend_row(*html_, 4);
+  EXPECT_NE(b1.find(">89.60<"), std::string::npos) << b1;   // measured = 90 - 0.4
+  EXPECT_NE(b1.find(">+0.40<"), std::string::npos) << b1;
+  EXPECT_NE(b1.find(">PASS<"), std::string::npos) << b1;
+  EXPECT_NE(b2.find(">87.60<"), std::string::npos) << b2;
+  EXPECT_NE(b2.find(">FAIL<"), std::string::npos) << b2;
+  EXPECT_NE(b4.find(">NOT MEASURED<"), std::string::npos) << b4;
+  // Each bend is labelled on the picture.
+  for (int id = 1; id <= 4; ++id)
+    EXPECT_NE(html_->find(">B" + std::to_string(id) + "</text>"), std::string::npos) << id;
+}
+
+TEST_F(HtmlReport, EscapesEveryTextFromTheReport) {
+  EXPECT_NE(html_->find("HAT-7 &lt;rev&amp;B&gt;"), std::string::npos);
+  EXPECT_EQ(html_->find("HAT-7 <rev"), std::string::npos);
+  EXPECT_NE(html_->find("press-line-3 &lt;cell &quot;A&quot;&gt;"), std::string::npos);
+  EXPECT_EQ(html_->find("<cell"), std::string::npos);
+}
+
+TEST_F(HtmlReport, IsSelfContained) {
+  EXPECT_EQ(html_->find("http://"), std::string::npos);
+  EXPECT_EQ(html_->find("https://"), std::string::npos);
+  EXPECT_EQ(html_->find("<script"), std::string::npos);
+  EXPECT_EQ(html_->find("<link"), std::string::npos);
+  EXPECT_EQ(html_->find("url(http"), std::string::npos);
+  // Every picture is a data: URI: 4 deviation views, the bends, the compensation arrows.
+  EXPECT_EQ(count_of(*html_, "href='data:image/png;base64,"), 6u);
+  EXPECT_NE(html_->find("@page"), std::string::npos);
+}
+
+TEST_F(HtmlReport, EmbeddedViewsDecodeAndShowThePart) {
+  const std::string key = "href='data:image/png;base64,";
+  const auto at = html_->find(key) + key.size();
+  const std::string b64 = html_->substr(at, html_->find('\'', at) - at);
+  // Decode base64 by hand (the inverse of report::base64).
+  std::string bytes;
+  int bits = 0, value = 0;
+  for (char c : b64) {
+    const auto pos = std::string("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/")
+                         .find(c);
+    if (pos == std::string::npos) break;
+    value = (value << 6) | static_cast<int>(pos);
+    if ((bits += 6) >= 8) bytes.push_back(static_cast<char>((value >> (bits -= 8)) & 0xff));
+  }
+  auto png = testing::decode_png(bytes);
+  ASSERT_TRUE(png);
+  EXPECT_EQ(png->width, ReportSettings{}.view_width_px);
+  std::size_t coloured = 0;
+  for (std::size_t i = 0; i < png->pixels.size(); i += 3)
+    coloured += (png->pixels[i] != 255 || png->pixels[i + 1] != 255) ? 1 : 0;
+  // The top view of the hat profile fills most of its frame.
+  EXPECT_GT(coloured, png->pixels.size() / 3 / 2);
+}
+
+TEST_F(HtmlReport, PlotsTheErrorProgression) {
+  // 9 errors: 9 dots of E(i), 8 of the quotient.
+  EXPECT_EQ(count_of(*html_, "<circle class='s1'"), 9u);
+  EXPECT_EQ(count_of(*html_, "<circle class='s2'"), 8u);
+  EXPECT_NE(html_->find("stop 0.995"), std::string::npos);
+}
+
+TEST(HtmlReportAlone, PassingReportWithoutCloudSaysThePictureIsMissing) {
+  auto f = testing::make_fixture(0);
+  f.report.mutable_verdict()->set_pass(true);
+  f.report.mutable_verdict()->clear_reasons();
+  ReportSettings settings;
+  settings.missing_cloud_note = "deviation.ply not found beside report.pb";
+  auto html = render_report_html(f.report, {}, settings);
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("class='banner pass'"), std::string::npos);
+  EXPECT_NE(html->find("Picture missing: deviation.ply not found beside report.pb"),
+            std::string::npos);
+  EXPECT_EQ(count_of(*html, "<tr class='bend "), 4u);
+  // Compensation arrows still draw, on their own.
+  EXPECT_NE(html->find("class='arrow'"), std::string::npos);
+}
+
+TEST(HtmlReportAlone, RejectsACloudWithMismatchedAttributes) {
+  analysis::PointCloud cloud;
+  cloud.points = {{0, 0, 0}, {1, 0, 0}};
+  cloud.scalars = {0.1};
+  auto html = render_report_html(v1::InspectionReport{}, cloud);
+  ASSERT_FALSE(html.ok());
+  EXPECT_NE(html.message().find("2 points"), std::string::npos) << html.message();
+}
+
+TEST(HtmlReportAlone, EmptyReportStillRenders) {
+  auto html = render_report_html(v1::InspectionReport{}, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("No error history"), std::string::npos);
+  EXPECT_NE(html->find("No bends"), std::string::npos);
+}
+
+TEST(HtmlReportAlone, WriterPutsTheFileInPlaceOrNamesThePath) {
+  const auto dir = std::filesystem::temp_directory_path() / "springscan_report_writer_test";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto f = testing::make_fixture(2000);
+  auto written = write_report_html_in_dir(dir, f.report, f.cloud);
+  ASSERT_TRUE(written.ok()) << written.message();
+  EXPECT_EQ(*written, dir / "report.html");
+  std::ifstream in(*written, std::ios::binary);
+  std::stringstream content;
+  content << in.rdbuf();
+  EXPECT_EQ(content.str(), *render_report_html(f.report, f.cloud));  // same seed, same bytes
+  EXPECT_FALSE(std::filesystem::exists(dir / "report.html.tmp"));
+  auto missing = write_report_html_in_dir(dir / "no" / "such", f.report, f.cloud);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.message().find("no/such"), std::string::npos) << missing.message();
+  std::filesystem::remove_all(dir);
+}
+
+TEST(HtmlText, EscapesAndEncodes) {
+  EXPECT_EQ(escape_html("<a href=\"x\">Tom & 'Jerry'</a>"),
+            "&lt;a href=&quot;x&quot;&gt;Tom &amp; &#39;Jerry&#39;&lt;/a&gt;");
+  EXPECT_EQ(base64(""), "");
+  EXPECT_EQ(base64("f"), "Zg==");
+  EXPECT_EQ(base64("fo"), "Zm8=");
+  EXPECT_EQ(base64("foobar"), "Zm9vYmFy");  // RFC 4648 section 10
+  EXPECT_EQ(fixed(-0.0001, 2), "0.00");
+  EXPECT_EQ(signed_fixed(0.4, 2), "+0.40");
+  EXPECT_EQ(signed_fixed(-0.3, 2), "-0.30");
+  EXPECT_EQ(signed_fixed(0.0, 2), "0.00");
+  EXPECT_EQ(fixed(std::nan(""), 2), "n/a");
+}
+
+TEST(Plots, NiceStepsAndColourBarTolerance) {
+  EXPECT_DOUBLE_EQ(nice_step(10.0, 5), 2.0);
+  EXPECT_DOUBLE_EQ(nice_step(2.0, 8), 0.2);
+  EXPECT_DOUBLE_EQ(nice_step(0.0, 5), 1.0);
+  const std::string bar = color_bar_svg(1.0, 0.5, 500);
+  EXPECT_EQ(count_of(bar, "class='tol'"), 2u);
+  EXPECT_NE(bar.find("\u00b10.500 mm"), std::string::npos);
+  EXPECT_NE(bar.find(">-1.0<"), std::string::npos);
+  EXPECT_NE(bar.find(">+1.0<"), std::string::npos);
+}
+
+TEST(Figures, BendAxisSpansThePointsNearIt) {
+  v1::Bend bend;
+  bend.mutable_axis_point()->set_x(10);
+  bend.mutable_axis_point()->set_y(40);
+  bend.mutable_axis_direction()->set_y(2);  // not unit: normalised inside
+  bend.set_radius_mm(2);
+  std::vector<Vec3> points;
+  for (int y = 0; y <= 80; ++y) points.emplace_back(10.5, y, 0.5);   // along the axis
+  for (int x = 30; x <= 130; ++x) points.emplace_back(x, 200, 0);     // far away
+  const auto [a, b] = bend_axis_extent(bend, points);
+  EXPECT_TRUE(a.isApprox(Vec3(10, 0, 0))) << a.transpose();
+  EXPECT_TRUE(b.isApprox(Vec3(10, 80, 0))) << b.transpose();
+}
+
+}  // namespace
+}  // namespace springscan::report
