@@ -2,12 +2,14 @@
 // The search is the rectangular Jonker-Volgenant variant of D. F. Crouse, "On implementing 2D
 // rectangular assignment algorithms", IEEE TAES 52(4), 2016, Algorithm 1; the dual updates keep
 // v_j <= 0 and v_j = 0 on unused columns, which is what makes the rectangular certificate hold.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "analysis/assignment.hpp"
+#include "analysis/assignment_init.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -168,7 +170,18 @@ Expected<Assignment> solve_with(const Costs& costs) {
   a.v.assign(costs.cols(), 0.0);
   if (costs.rows() == 0) return a;
 
+  // Warm start: greedy row reduction, then Jonker-Volgenant augmenting row reduction.
   row_reduction(costs, a);
+  const auto scan_row = [&costs](std::size_t i, auto&& visit) {
+    const auto row = costs.row(i);
+    for (std::size_t j = 0; j < costs.cols(); ++j) visit(j, row(j));
+  };
+  if (!detail::augmenting_row_reduction(costs.rows(), scan_row, a)) {
+    std::fill(a.row_to_col.begin(), a.row_to_col.end(), -1);
+    std::fill(a.col_to_row.begin(), a.col_to_row.end(), -1);
+    std::fill(a.v.begin(), a.v.end(), 0.0);
+    row_reduction(costs, a);
+  }
   DenseWorkspace w;
   w.pred.assign(costs.cols(), -1);
   for (std::size_t i = 0; i < costs.rows(); ++i) {

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "analysis/assignment.hpp"
+#include "analysis/assignment_init.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -149,7 +150,19 @@ Expected<Assignment> solve_sparse(const CandidateGraph& graph) {
   a.col_to_row.assign(graph.cols, -1);
   a.u.assign(graph.rows, 0.0);
   a.v.assign(graph.cols, 0.0);
+  // Warm start: greedy row reduction, then Jonker-Volgenant augmenting row reduction.
   row_reduction(graph, a);
+  const auto scan_row = [&graph](std::size_t i, auto&& visit) {
+    for (std::size_t e = graph.row_offsets[i]; e < graph.row_offsets[i + 1]; ++e) {
+      visit(static_cast<std::size_t>(graph.col_index[e]), graph.costs[e]);
+    }
+  };
+  if (!detail::augmenting_row_reduction(graph.rows, scan_row, a)) {
+    std::fill(a.row_to_col.begin(), a.row_to_col.end(), -1);
+    std::fill(a.col_to_row.begin(), a.col_to_row.end(), -1);
+    std::fill(a.v.begin(), a.v.end(), 0.0);
+    row_reduction(graph, a);
+  }
 
   SparseWorkspace w;
   w.dist.assign(graph.cols, kInf);
