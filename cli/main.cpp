@@ -10,11 +10,13 @@ namespace springscan::cli {
 
 // One line per subcommand; the implementations live in cmd_<name>.cpp.
 int version_main(int argc, char** argv);
+int match_main(int argc, char** argv);
 
 namespace {
 
 const Command kCommands[] = {
     {"version", "print the version", version_main},
+    {"match", "pair model and scan points by exact min-cost matching", match_main},
 };
 
 void print_usage() {
