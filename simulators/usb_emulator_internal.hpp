@@ -1,0 +1,72 @@
+#pragma once
+// Internals of the USB emulation shared by usb_emulator.cpp (testbed, plug/unplug) and
+// usb_ioctl.cpp (the usbfs ioctl handler). Not part of the simulators' interface.
+
+#include <umockdev.h>
+
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "simulators/usb_emulator.hpp"
+
+namespace springscan::simulators {
+
+/// A GObject reference that is released with its owner.
+struct GObjectUnref {
+  void operator()(void* object) const {
+    if (object != nullptr) g_object_unref(object);
+  }
+};
+using DataPtr = std::unique_ptr<UMockdevIoctlData, GObjectUnref>;
+
+/// One URB the client submitted: its struct and data buffer, resolved into our memory.
+struct Urb {
+  UMockdevIoctlClient* client = nullptr;
+  std::uintptr_t client_address = 0;  // the client's pointer, to match DISCARDURB
+  DataPtr urb;                        // struct usbdevfs_urb
+  DataPtr buffer;                     // its data
+};
+
+struct EmulatedUsbScanner::Impl {
+  // Set at creation, immutable afterwards.
+  UMockdevTestbed* testbed = nullptr;
+  UMockdevIoctlBase* handler = nullptr;
+  std::string sysfs_path;  // /devices/...
+  std::string dev_node;    // /dev/bus/usb/BBB/DDD
+  std::string description; // umockdev text record of the device
+  ScannerDeviceSettings device_settings;
+  analysis::PointCloud surface;
+  std::uint16_t product_id = 0;
+
+  mutable std::mutex mutex;  // guards everything below
+  std::unique_ptr<ScannerDevice> device;
+  bool plugged = false;
+  bool in_halted = false;
+  int generation = 0;                              // increments per plug
+  std::map<UMockdevIoctlClient*, int> clients;     // the generation each client opened
+  std::deque<Urb> pending_in;                      // bulk IN URBs waiting for data
+  std::deque<Urb> done;                            // completed, waiting to be reaped
+  EmulatorStats stats;
+  std::vector<std::thread> hotplug_threads;        // uevents go out off the worker thread
+
+  /// Completes queued IN URBs from the device's output; runs the device's fault events.
+  void fill_locked();
+  /// The cable is pulled: queued URBs fail with -ESHUTDOWN; the uevent is sent by a thread.
+  void disconnect_locked();
+  /// True when `client` opened the device node of the device that is plugged in now.
+  bool live_locked(UMockdevIoctlClient* client);
+  /// Answers one usbfs ioctl (usb_ioctl.cpp).
+  void handle_ioctl(UMockdevIoctlClient* client);
+  void forget_client(UMockdevIoctlClient* client);
+  /// Standard GET_DESCRIPTOR answers on endpoint 0 (strings carry the identity).
+  std::vector<std::uint8_t> control_reply(const std::uint8_t setup[8]) const;
+  std::vector<std::uint8_t> descriptors() const;
+};
+
+}  // namespace springscan::simulators
