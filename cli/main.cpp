@@ -11,12 +11,14 @@ namespace springscan::cli {
 // One line per subcommand; the implementations live in cmd_<name>.cpp.
 int version_main(int argc, char** argv);
 int match_main(int argc, char** argv);
+int report_main(int argc, char** argv);
 
 namespace {
 
 const Command kCommands[] = {
     {"version", "print the version", version_main},
     {"match", "pair model and scan points by exact min-cost matching", match_main},
+    {"report", "render the HTML report again from a saved report.pb", report_main},
 };
 
 void print_usage() {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <sstream>
+#include <thread>
 
 #include "report/colormap.hpp"
 #include "report/html_text.hpp"
@@ -114,13 +116,31 @@ DrawCloud make_draw_cloud(const analysis::PointCloud& cloud, double scale_mm,
 analysis::Expected<std::string> deviation_views_html(const DrawCloud& cloud,
                                                      const ReportSettings& settings) {
   if (cloud.points.empty()) return missing_picture(settings);
+  constexpr ViewKind kKinds[] = {ViewKind::kTop, ViewKind::kFront, ViewKind::kSide,
+                                 ViewKind::kIsometric};
+  constexpr std::size_t kCount = std::size(kKinds);
+  // The views are independent: worker w draws views w, w + T, ...; each result has its own
+  // slot, and the page joins them in a fixed order, so the thread count changes nothing.
+  std::vector<analysis::Expected<std::string>> svgs(kCount, analysis::fail("not rendered"));
+  const auto draw = [&](std::size_t first, std::size_t stride) {
+    for (std::size_t i = first; i < kCount; i += stride) {
+      const ViewProjection view = fit_view(cloud.points, kKinds[i], view_settings(settings));
+      svgs[i] = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings,
+                         "", std::string("deviation, ") + view_name(kKinds[i]) + " view");
+    }
+  };
+  const std::size_t workers = std::min<std::size_t>(
+      kCount, settings.threads > 0 ? static_cast<std::size_t>(settings.threads)
+                                   : std::max(1u, std::thread::hardware_concurrency()));
+  std::vector<std::thread> pool;
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(draw, w, workers);
+  draw(0, workers);
+  for (auto& t : pool) t.join();
+
   std::string html = "<div class='views'>";
-  for (auto kind : {ViewKind::kTop, ViewKind::kFront, ViewKind::kSide, ViewKind::kIsometric}) {
-    const ViewProjection view = fit_view(cloud.points, kind, view_settings(settings));
-    auto svg = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings, "",
-                          std::string("deviation, ") + view_name(kind) + " view");
-    if (!svg) return svg.error();
-    html += "<figure class='view'>" + *svg + "<figcaption>" + view_name(kind) +
+  for (std::size_t i = 0; i < kCount; ++i) {
+    if (!svgs[i]) return svgs[i].error();
+    html += "<figure class='view'>" + *svgs[i] + "<figcaption>" + view_name(kKinds[i]) +
             " view</figcaption></figure>";
   }
   return html + "</div>";

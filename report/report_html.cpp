@@ -1,9 +1,9 @@
 #include "report/report_html.hpp"
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
+#include "analysis/file_io.hpp"
 #include "report/figures.hpp"
 #include "report/html_text.hpp"
 #include "report/plots.hpp"
@@ -124,21 +124,9 @@ analysis::Expected<std::filesystem::path> write_report_html(
     const analysis::PointCloud& deviation_cloud, const ReportSettings& settings) {
   auto html = render_report_html(report, deviation_cloud, settings);
   if (!html) return html.error();
-  std::filesystem::path temporary = path;
-  temporary += ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    out << *html;
-    out.close();
-    if (!out) return analysis::fail(temporary.string() + ": cannot write the HTML report");
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    const std::string reason = error.message();
-    std::filesystem::remove(temporary, error);
-    return analysis::fail(path.string() + ": cannot move the HTML report into place: " + reason);
-  }
+  // A reader (a browser, the daemon's report store) sees the old page or the whole new one.
+  auto written = analysis::write_file_atomically(path.string(), *html);
+  if (!written) return written.error();
   return path;
 }
 

@@ -24,8 +24,8 @@ analysis::Expected<std::string> render_report_html(const v1::InspectionReport& r
                                                    const analysis::PointCloud& deviation_cloud,
                                                    const ReportSettings& settings = {});
 
-/// Renders the page and writes it to `path` atomically (a temporary file beside it, then a
-/// rename), so a reader never sees half a report. Errors name the path and the cause.
+/// Renders the page and writes it to `path` atomically (analysis::write_file_atomically), so
+/// a reader never sees half a report. Errors name the path and the cause.
 analysis::Expected<std::filesystem::path> write_report_html(
     const std::filesystem::path& path, const v1::InspectionReport& report,
     const analysis::PointCloud& deviation_cloud, const ReportSettings& settings = {});

@@ -165,11 +165,21 @@ TEST(HtmlReportAlone, WriterPutsTheFileInPlaceOrNamesThePath) {
   std::stringstream content;
   content << in.rdbuf();
   EXPECT_EQ(content.str(), *render_report_html(f.report, f.cloud));  // same seed, same bytes
-  EXPECT_FALSE(std::filesystem::exists(dir / "report.html.tmp"));
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir),
+                          std::filesystem::directory_iterator()),
+            1);  // no temporary file left behind
   auto missing = write_report_html_in_dir(dir / "no" / "such", f.report, f.cloud);
   ASSERT_FALSE(missing.ok());
   EXPECT_NE(missing.message().find("no/such"), std::string::npos) << missing.message();
   std::filesystem::remove_all(dir);
+}
+
+TEST(HtmlReportAlone, SamePageForAnyThreadCount) {
+  const auto f = testing::make_fixture(3000);
+  ReportSettings one, many;
+  one.threads = 1;
+  many.threads = 3;
+  EXPECT_EQ(*render_report_html(f.report, f.cloud, one), *render_report_html(f.report, f.cloud, many));
 }
 
 TEST(HtmlText, EscapesAndEncodes) {
