@@ -16,25 +16,24 @@ using Mat6 = Eigen::Matrix<double, 6, 6>;
 constexpr std::size_t kBlock = 4096;
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-// One pair: the point-to-plane residual r = n . (p - q) and the plane normal n.
+// One pair: the tangent plane n . x = offset of the model point found for a scan point.
 struct Pair {
   Vec3 normal = Vec3::Zero();
-  double residual = 0.0;
+  double offset = 0.0;
   bool valid = false;
 };
 
 Pair find_pair(const LocalFitTarget& target, const Vec3& p, const LocalFitSettings& st) {
-  Pair pair;
   const PartModel& model = target.model();
   if (st.correspondence == LocalFitCorrespondence::kExactSurface) {
     const SurfaceHit hit = model.distance->closest(p);
-    if ((p - hit.foot).norm() > st.max_correspondence_distance_mm) return pair;
-    return {hit.normal, hit.normal.dot(p - hit.foot), true};
+    if ((p - hit.foot).norm() > st.max_correspondence_distance_mm) return {};
+    return {hit.normal, hit.normal.dot(hit.foot), true};
   }
   const auto nn = target.tree().nearest(p, st.max_correspondence_distance_mm);
-  if (!nn) return pair;
+  if (!nn) return {};
   const Vec3& n = model.samples.normals[nn->index];
-  return {n, n.dot(p - model.samples.points[nn->index]), true};
+  return {n, n.dot(model.samples.points[nn->index]), true};
 }
 
 // Normal equations of the linearised point-to-plane error about `center`, with the rotation
@@ -47,11 +46,11 @@ struct System {
 };
 
 // The residual threshold: inlier_sigma_factor robust sigmas (1.4826 * median |r|), clamped.
-double inlier_threshold(const std::vector<Pair>& pairs, const LocalFitSettings& st,
-                        std::vector<double>& scratch) {
+double inlier_threshold(const std::vector<Pair>& pairs, const std::vector<double>& residuals,
+                        const LocalFitSettings& st, std::vector<double>& scratch) {
   scratch.clear();
-  for (const Pair& p : pairs)
-    if (p.valid) scratch.push_back(std::abs(p.residual));
+  for (std::size_t i = 0; i < pairs.size(); ++i)
+    if (pairs[i].valid) scratch.push_back(std::abs(residuals[i]));
   if (scratch.empty()) return 0.0;
   const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
   std::nth_element(scratch.begin(), mid, scratch.end());
@@ -60,22 +59,34 @@ double inlier_threshold(const std::vector<Pair>& pairs, const LocalFitSettings& 
                     st.max_correspondence_distance_mm);
 }
 
-System accumulate(const std::vector<Vec3>& moved, const std::vector<Pair>& pairs,
-                  const Vec3& center, double scale, double threshold, int threads) {
-  std::vector<System> partial(block_count(moved.size(), kBlock));
-  for_each_block(moved.size(), kBlock, threads, [&](std::size_t b, std::size_t lo, std::size_t hi) {
-    System& s = partial[b];
-    for (std::size_t i = lo; i < hi; ++i) {
-      const Pair& p = pairs[i];
-      if (!p.valid || std::abs(p.residual) > threshold) continue;
-      Vec6 J;
-      J << (moved[i] - center).cross(p.normal) / scale, p.normal;
-      s.H.noalias() += J * J.transpose();
-      s.g += J * p.residual;
-      s.sum_sq += p.residual * p.residual;
-      ++s.count;
-    }
-  });
+// Everything one fit iterates over; the buffers are allocated once per fit.
+struct FitState {
+  std::vector<Vec3> source;
+  std::vector<Pair> pairs;
+  std::vector<double> residuals;
+  std::vector<double> scratch;
+  Vec3 center0 = Vec3::Zero();
+  double scale = 1.0;
+};
+
+System accumulate(const FitState& f, const Transform& T, double threshold, int threads) {
+  const Vec3 center = T * f.center0;
+  std::vector<System> partial(block_count(f.source.size(), kBlock));
+  for_each_block(f.source.size(), kBlock, threads,
+                 [&](std::size_t b, std::size_t lo, std::size_t hi) {
+                   System& s = partial[b];
+                   for (std::size_t i = lo; i < hi; ++i) {
+                     const Pair& p = f.pairs[i];
+                     const double r = f.residuals[i];
+                     if (!p.valid || std::abs(r) > threshold) continue;
+                     Vec6 J;
+                     J << (T * f.source[i] - center).cross(p.normal) / f.scale, p.normal;
+                     s.H.noalias() += J * J.transpose();
+                     s.g += J * r;
+                     s.sum_sq += r * r;
+                     ++s.count;
+                   }
+                 });
   System total;
   for (const System& s : partial) {  // fixed block order: independent of the thread count
     total.H += s.H;
@@ -102,6 +113,36 @@ Vec6 solve_determined(const System& sys, double ratio, int& determined) {
   return x;
 }
 
+// One Gauss-Newton step on the current pairs. Returns false when too few pairs are left;
+// `small` tells whether the step fell below the convergence settings.
+bool gauss_newton_step(FitState& f, Transform& T, const LocalFitSettings& st,
+                       LocalFitResult& result, bool record, bool& small) {
+  for_each_block(f.source.size(), kBlock, st.threads,
+                 [&](std::size_t, std::size_t lo, std::size_t hi) {
+                   for (std::size_t i = lo; i < hi; ++i)
+                     f.residuals[i] = f.pairs[i].normal.dot(T * f.source[i]) - f.pairs[i].offset;
+                 });
+  const double threshold = inlier_threshold(f.pairs, f.residuals, st, f.scratch);
+  const System sys = accumulate(f, T, threshold, st.threads);
+  if (sys.count < 3) return false;
+  if (record) result.error_history.push_back(sys.sum_sq / static_cast<double>(sys.count));
+  result.inliers = sys.count;
+  const Vec6 x =
+      solve_determined(sys, st.degenerate_eigenvalue_ratio, result.determined_directions);
+  const Vec3 omega = x.head<3>() / f.scale;
+  const Vec3 t = x.tail<3>();
+  // p' = c + R (p - c) + t: the update turns about the current centroid.
+  const Vec3 center = T * f.center0;
+  Transform step = Transform::Identity();
+  if (omega.norm() > 0.0)
+    step.linear() = Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix();
+  step.translation() = center + t - step.linear() * center;
+  T = step * T;
+  small = omega.norm() < st.convergence_rotation_deg * kDegToRad &&
+          t.norm() < st.convergence_translation_mm;
+  return true;
+}
+
 }  // namespace
 
 LocalFitTarget::LocalFitTarget(const PartModel& model)
@@ -118,61 +159,46 @@ Expected<LocalFitResult> local_fit(const LocalFitTarget& target, const PointClou
     return fail("local_fit: the model samples have no normals");
   if (st.correspondence == LocalFitCorrespondence::kExactSurface && !model.distance)
     return fail("local_fit: kExactSurface needs PartModel::distance");
-  std::vector<Vec3> source;
-  source.reserve(indices.size());
+  FitState f;
+  f.source.reserve(indices.size());
   for (std::uint32_t i : indices) {
     if (i >= scan.size())
       return fail("local_fit: index " + std::to_string(i) + " outside the scan of " +
                   std::to_string(scan.size()) + " points");
-    source.push_back(scan.points[i]);
+    f.source.push_back(scan.points[i]);
   }
-  // Rotations act about the subset's centroid, scaled by its rms radius (metres vs radians).
-  Vec3 center0 = Vec3::Zero();
-  for (const Vec3& p : source) center0 += p;
-  center0 /= static_cast<double>(source.size());
+  // Rotations act about the subset's centroid, scaled by its rms radius (mm vs radians).
+  for (const Vec3& p : f.source) f.center0 += p;
+  f.center0 /= static_cast<double>(f.source.size());
   double spread = 0.0;
-  for (const Vec3& p : source) spread += (p - center0).squaredNorm();
-  const double scale = std::max(std::sqrt(spread / static_cast<double>(source.size())), 1e-9);
+  for (const Vec3& p : f.source) spread += (p - f.center0).squaredNorm();
+  f.scale = std::max(std::sqrt(spread / static_cast<double>(f.source.size())), 1e-9);
+  f.pairs.resize(f.source.size());
+  f.residuals.resize(f.source.size());
+  f.scratch.reserve(f.source.size());
 
   LocalFitResult result;
-  result.points = source.size();
-  std::vector<Vec3> moved(source.size());
-  std::vector<Pair> pairs(source.size());
-  std::vector<double> scratch;
-  scratch.reserve(source.size());
+  result.points = f.source.size();
   Transform& T = result.T_model_subset;
-  for (int iteration = 0; iteration < st.max_iterations; ++iteration) {
-    for_each_block(source.size(), kBlock, st.threads,
+  // ICP: find the pairs, then solve the point-to-plane problem on them to convergence (a few
+  // Gauss-Newton steps); stop when fresh pairs no longer move the subset.
+  for (int iteration = 0; iteration < st.max_iterations && !result.converged; ++iteration) {
+    for_each_block(f.source.size(), kBlock, st.threads,
                    [&](std::size_t, std::size_t lo, std::size_t hi) {
-                     for (std::size_t i = lo; i < hi; ++i) {
-                       moved[i] = T * source[i];
-                       pairs[i] = find_pair(target, moved[i], st);
-                     }
+                     for (std::size_t i = lo; i < hi; ++i)
+                       f.pairs[i] = find_pair(target, T * f.source[i], st);
                    });
-    const double threshold = inlier_threshold(pairs, st, scratch);
-    const Vec3 center = T * center0;
-    const System sys = accumulate(moved, pairs, center, scale, threshold, st.threads);
-    if (sys.count < 3)
-      return fail("local_fit: only " + std::to_string(sys.count) + " of " +
-                  std::to_string(source.size()) + " points within " +
-                  std::to_string(st.max_correspondence_distance_mm) + " mm of the model");
-    result.error_history.push_back(sys.sum_sq / static_cast<double>(sys.count));
-    result.inliers = sys.count;
     result.iterations = iteration + 1;
-    const Vec6 x =
-        solve_determined(sys, st.degenerate_eigenvalue_ratio, result.determined_directions);
-    const Vec3 omega = x.head<3>() / scale;
-    const Vec3 t = x.tail<3>();
-    // p' = c + R (p - c) + t: the update turns about the current centroid.
-    Transform step = Transform::Identity();
-    if (omega.norm() > 0.0)
-      step.linear() = Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix();
-    step.translation() = center + t - step.linear() * center;
-    T = step * T;
-    if (omega.norm() < st.convergence_rotation_deg * kDegToRad &&
-        t.norm() < st.convergence_translation_mm) {
-      result.converged = true;
-      break;
+    for (int inner = 0; inner < std::max(st.max_inner_iterations, 1); ++inner) {
+      bool small = false;
+      if (!gauss_newton_step(f, T, st, result, inner == 0, small))
+        return fail("local_fit: fewer than 3 of " + std::to_string(f.source.size()) +
+                    " points within " + std::to_string(st.max_correspondence_distance_mm) +
+                    " mm of the model");
+      if (small) {
+        result.converged = inner == 0;
+        break;
+      }
     }
   }
   result.rms_mm = std::sqrt(result.error_history.back());

@@ -26,7 +26,8 @@ enum class LocalFitCorrespondence {
 };
 
 struct LocalFitSettings {
-  int max_iterations = 30;                      ///< ICP iterations at most
+  int max_iterations = 30;                      ///< ICP iterations (pair searches) at most
+  int max_inner_iterations = 10;                ///< Gauss-Newton steps per set of pairs
   double max_correspondence_distance_mm = 5.0;  ///< pairs farther apart are left out
   double inlier_sigma_factor = 3.0;       ///< residuals beyond factor * 1.4826 * MAD are left out
   double min_inlier_threshold_mm = 0.01;  ///< that residual threshold never goes below this
@@ -54,12 +55,13 @@ class LocalFitTarget {
 
 struct LocalFitResult {
   Transform T_model_subset = Transform::Identity();  ///< maps the subset onto the model
-  double rms_mm = 0.0;      ///< rms point-to-plane residual of the inliers at the end
-  std::size_t points = 0;   ///< subset size
-  std::size_t inliers = 0;  ///< pairs used in the last iteration
-  int iterations = 0;
-  bool converged = false;             ///< the update fell below the convergence settings
-  std::vector<double> error_history;  ///< E(i): mean squared residual of the inliers, mm^2
+  double rms_mm = 0.0;                ///< rms point-to-plane residual of the inliers at the end
+  std::size_t points = 0;             ///< subset size
+  std::size_t inliers = 0;            ///< pairs used in the last iteration
+  int iterations = 0;                 ///< pair searches
+  bool converged = false;             ///< fresh pairs moved the subset less than the settings
+  std::vector<double> error_history;  ///< E(i) with the pairs of search i: mean squared
+                                      ///< residual of the inliers, mm^2
   int determined_directions = 0;      ///< of 6 in the last iteration; a flat flange gives 3
 };
 
