@@ -52,7 +52,11 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
   result.icp = std::move(*fit);
   result.T_cad_scan = result.icp.T_target_source;
   result.rms_final_mm = rms_nearest_distance(scan, result.T_cad_scan, model_tree, threads);
-  if (result.icp.degenerate)
+  // A flat scan fixes only its normal offset and tilt by the surface; in-plane placement then
+  // rests on the outline (PCA) alone, even when ICP had nothing left to solve.
+  const auto frame = principal_frame(scan);
+  const bool flat = frame && frame->eigenvalues(2) <= 1e-8 * frame->eigenvalues(0);
+  if (result.icp.degenerate || flat)
     result.warnings.push_back(
         "global fit: the surface does not constrain every motion (e.g. a flat or cylindrical "
         "part); the fit along the free directions is arbitrary");

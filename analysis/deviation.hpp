@@ -1,0 +1,54 @@
+#pragma once
+// Deviation (DESIGN.md stage 5): the signed distance of every scan point (already in the CAD
+// frame) to the model surface, positive on the side the surface normal points to, and its
+// statistics. Exact CAD distance through PartModel::distance when the model has it; otherwise
+// the distance to the tangent plane of the nearest model sample (sign by the sample normal).
+
+#include <cstddef>
+#include <vector>
+
+#include "analysis/expected.hpp"
+#include "analysis/kdtree.hpp"
+#include "analysis/part_model.hpp"
+#include "analysis/point_cloud.hpp"
+
+namespace springscan::analysis {
+
+struct DeviationSettings {
+  double tolerance_mm = 0.5;    ///< |signed distance| beyond this is out of tolerance
+  double color_scale_mm = 0.0;  ///< |d| shown as full blue/red; 0 = tolerance_mm
+  int threads = 0;              ///< worker threads, 0 = all cores; no effect on the result
+};
+
+struct DeviationStatistics {
+  double min_mm = 0.0;
+  double max_mm = 0.0;
+  double mean_mm = 0.0;
+  double rms_mm = 0.0;
+  double p95_mm = 0.0;  ///< 95th percentile of |d| (nearest rank)
+  double fraction_out_of_tolerance = 0.0;
+  double tolerance_mm = 0.0;
+  std::size_t points = 0;
+};
+
+struct DeviationResult {
+  std::vector<double> signed_distance_mm;  ///< one per scan point, in input order
+  DeviationStatistics statistics;
+  bool exact = false;  ///< true: CAD surface distance; false: model sample tangent planes
+};
+
+/// Signed deviation of `scan_in_cad` from `model`. `model_tree` must index model.samples.points
+/// (it is only used without model.distance). Thread-safe; O(n log m) with samples.
+/// Errors: non-finite points, samples without normals, a tree that does not match the samples.
+Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
+                                           const PartModel& model, const KdTree& model_tree,
+                                           const DeviationSettings& settings = {});
+
+/// Statistics of signed distances (deterministic, exact percentile).
+DeviationStatistics deviation_statistics(const std::vector<double>& signed_distance_mm,
+                                         double tolerance_mm);
+
+/// The deviation.ply colour map: blue (-scale) .. green (0) .. red (+scale), linear, saturated.
+Rgb deviation_color(double signed_distance_mm, double scale_mm);
+
+}  // namespace springscan::analysis

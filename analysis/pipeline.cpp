@@ -1,0 +1,155 @@
+// The inspection pipeline (DESIGN.md "Analysis pipeline"): one commented line per stage.
+#include "analysis/pipeline.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "analysis/deviation.hpp"
+#include "analysis/fit_proto.hpp"
+#include "analysis/global_fit.hpp"
+#include "analysis/kdtree.hpp"
+#include "analysis/parallel.hpp"
+#include "analysis/reduction.hpp"
+#include "analysis/settings_proto.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Every stage's settings, from the C++ defaults plus the proto overrides.
+struct PipelineSettings {
+  NormalSettings normals;
+  ReductionSettings reduction;
+  GlobalFitSettings global_fit;
+  DeviationSettings deviation;
+  int threads = 0;
+};
+
+Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
+  PipelineSettings s;
+  auto threads = threads_from_proto(m);
+  auto normals = from_proto(m.normals());
+  auto reduction = from_proto(m.reduction());
+  auto fit = from_proto(m.registration());
+  auto deviation = from_proto(m.deviation());
+  for (const std::string* error : {threads ? nullptr : &threads.message(),
+                                   normals ? nullptr : &normals.message(),
+                                   reduction ? nullptr : &reduction.message(),
+                                   fit ? nullptr : &fit.message(),
+                                   deviation ? nullptr : &deviation.message()})
+    if (error) return fail(*error);
+  s.threads = *threads;
+  s.normals = *normals;
+  s.reduction = *reduction;
+  s.global_fit = *fit;
+  s.deviation = *deviation;
+  s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
+  s.deviation.threads = s.reduction.curvature.threads = s.threads;
+  return s;
+}
+
+// report.settings: the overrides as given (other stages' sections kept), ours with defaults.
+void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& given,
+                     v1::AnalysisSettings* out) {
+  *out = given;
+  to_proto(s.normals, out->mutable_normals());
+  to_proto(s.reduction, out->mutable_reduction());
+  to_proto(s.global_fit, out->mutable_registration());
+  to_proto(s.deviation, out->mutable_deviation());
+  out->set_threads(s.threads);
+}
+
+// Refuses what no fit can use; warns about what makes a fit doubtful (issue 3 "Bad input").
+std::optional<Error> check_inputs(const PartModel& model, const PointCloud& scan,
+                                  v1::InspectionReport& report) {
+  if (scan.empty()) return fail("scan: no points");
+  if (scan.size() < 3)
+    return fail("scan: needs at least 3 points, got " + std::to_string(scan.size()));
+  if (model.samples.size() < 3) return fail("model: fewer than 3 samples");
+  if (!all_finite(scan.points)) return fail("scan: non-finite (NaN/inf) coordinates");
+  if (!all_finite(model.samples.points)) return fail("model: non-finite (NaN/inf) coordinates");
+  if (model.samples.normals.size() != model.samples.size())
+    return fail("model: the samples need normals (" + std::to_string(model.samples.normals.size()) +
+                " for " + std::to_string(model.samples.size()) + " points)");
+  const auto [slo, shi] = bounding_box(scan.points);
+  const auto [mlo, mhi] = bounding_box(model.samples.points);
+  const double scan_size = (shi - slo).norm(), model_size = (mhi - mlo).norm();
+  const double ratio = std::max(scan_size, model_size) / std::max(std::min(scan_size, model_size), 1e-12);
+  std::ostringstream text;
+  text << "scan extent " << scan_size << " mm vs model extent " << model_size << " mm (ratio "
+       << ratio << ")";
+  if (ratio >= 100.0)
+    return fail(text.str() + ": the scan and the model are probably in different units (mm vs m "
+                             "or inch); convert one of them");
+  if (ratio >= 5.0)
+    report.add_warnings(text.str() + ": a partial scan, or different units (inch vs mm?)");
+  return std::nullopt;
+}
+
+// deviation.ply content: scan in the CAD frame, signed deviation and its colour.
+PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviation,
+                           double color_scale_mm) {
+  scan_in_cad.scalars = deviation.signed_distance_mm;
+  scan_in_cad.colors.resize(scan_in_cad.size());
+  for (std::size_t i = 0; i < scan_in_cad.size(); ++i)
+    scan_in_cad.colors[i] = deviation_color(scan_in_cad.scalars[i], color_scale_mm);
+  return scan_in_cad;
+}
+
+}  // namespace
+
+Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
+                                           const v1::AnalysisSettings& settings) {
+  const auto start = Clock::now();
+  auto config = load_settings(settings);
+  if (!config) return fail(config.message());
+  InspectionOutcome out;
+  v1::InspectionReport& report = out.report;
+  report.set_schema("springscan.report.v1");
+  record_settings(*config, settings, report.mutable_settings());
+  report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan.size()));
+  report.mutable_input()->set_model_points(static_cast<std::int64_t>(model.samples.size()));
+  report.mutable_input()->set_cad_faces(model.face_count);
+  if (auto error = check_inputs(model, scan, report)) return *error;
+  auto& timings = *report.mutable_timings_ms();
+
+  auto t = Clock::now();
+  // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
+  auto reduced = reduce(scan, model.samples, config->reduction);
+  if (!reduced) return fail(reduced.message());
+  to_proto(*reduced, config->reduction, model.samples.size(), scan.size(), report.mutable_reduction());
+  timings.set_reduce(ms_since(t));
+
+  t = Clock::now();
+  // 4. Global fit: PCA with every proper axis candidate, then ICP (paper §3).
+  const KdTree model_tree(model.samples.points);
+  auto fit = global_fit(reduced->scan_for_fit.points, model_tree, model.samples.normals,
+                        config->global_fit);
+  if (!fit) return fail(fit.message());
+  to_proto(*fit, config->global_fit, report.mutable_global_fit());
+  for (const auto& warning : fit->warnings) report.add_warnings(warning);
+  timings.set_global_fit(ms_since(t));
+
+  t = Clock::now();
+  // 5. Deviation: signed distance of every scan point to the model (DESIGN.md stage 5).
+  PointCloud scan_in_cad = transformed(scan, fit->T_cad_scan);
+  auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
+  if (!deviation) return fail(deviation.message());
+  to_proto(*deviation, config->deviation, report.mutable_deviation());
+  out.deviation_cloud = deviation_cloud(std::move(scan_in_cad), *deviation,
+                                        report.deviation().color_scale_mm());
+  timings.set_deviation(ms_since(t));
+
+  // 6-9. Local fits and springback, deformation field, compensation, verdict: added here.
+
+  timings.set_total(ms_since(start));
+  return out;
+}
+
+}  // namespace springscan::analysis
