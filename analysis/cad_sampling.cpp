@@ -64,17 +64,22 @@ void sample_face(const CadShape::Impl& shape, int face_id, const FaceTriangles& 
   const double flip = topo_face.Orientation() == TopAbs_REVERSED ? -1.0 : 1.0;
   std::mt19937 rng(seed + 0x9E3779B9u * static_cast<std::uint32_t>(face_id + 1));
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (int s = 0; s < count; ++s) {
+  // A sample that falls where a chord cuts across a curved trim (outside the true face) is
+  // drawn again; the attempt cap only guards against a face the classifier rejects entirely.
+  for (int s = 0, attempts = 0; s < count && attempts < 20 * count + 100; ++attempts) {
     const double pick = unit(rng) * face.area();
     const auto it = std::lower_bound(face.cumulative_area.begin(), face.cumulative_area.end(), pick);
     const auto slot = static_cast<std::size_t>(
         std::min<std::ptrdiff_t>(it - face.cumulative_area.begin(),
                                  static_cast<std::ptrdiff_t>(face.triangles.size()) - 1));
-    const auto& tri = mesh.triangles[face.triangles[slot]];
+    const std::size_t triangle = face.triangles[slot];
+    const auto& tri = mesh.triangles[triangle];
     // Uniform point in a triangle: (1 - sqrt(r1), sqrt(r1) (1 - r2), sqrt(r1) r2).
     const double r1 = std::sqrt(unit(rng)), r2 = unit(rng);
     const double a = 1.0 - r1, b = r1 * (1.0 - r2), c = r1 * r2;
     const Eigen::Vector2d uv = a * mesh.uv[tri[0]] + b * mesh.uv[tri[1]] + c * mesh.uv[tri[2]];
+    if (!inside_trimmed(shape, face_id, static_cast<int>(triangle), uv)) continue;
+    ++s;
     const Vec3 chord_normal = (mesh.vertices[tri[1]] - mesh.vertices[tri[0]])
                                   .cross(mesh.vertices[tri[2]] - mesh.vertices[tri[0]])
                                   .normalized();

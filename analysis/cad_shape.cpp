@@ -119,6 +119,7 @@ Expected<CadShape> make_cad_shape(const TopoDS_Shape& shape, CadLoadReport repor
       if (impl->mesh.triangles.size() == before) ++report.faces_without_mesh;
     }
     report.triangles = static_cast<int>(impl->mesh.triangles.size());
+    prepare_trimming(*impl, settings.linear_deflection_mm);
     impl->report = report;
     return CadShape(std::move(impl));
   } catch (const Standard_Failure& e) {
