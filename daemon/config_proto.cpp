@@ -1,0 +1,273 @@
+// Conversion of the DaemonConfig text proto into DaemonSettings (STYLE.md section 1: only
+// *_proto.cpp files convert between proto messages and our structs).
+#include <arpa/inet.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <utility>
+
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
+
+#include "daemon/config.hpp"
+
+namespace springscan::daemon {
+
+namespace fs = std::filesystem;
+using analysis::Expected;
+using analysis::fail;
+using google::protobuf::TextFormat;
+
+namespace {
+
+/// Collects the parser's first error with its position (lines and columns are 0-based there).
+class FirstError : public google::protobuf::io::ErrorCollector {
+ public:
+  void AddError(int line, google::protobuf::io::ColumnNumber column,
+                const std::string& message) override {
+    if (!message_.empty()) return;
+    message_ = std::to_string(line + 1) + ":" + std::to_string(column + 1) + ": " + message;
+  }
+  const std::string& message() const { return message_; }
+
+ private:
+  std::string message_;
+};
+
+/// Turns a field path into "file:line:column: modbus.port" using the parser's locations.
+class Locator {
+ public:
+  using Path = std::vector<std::pair<const char*, int>>;  // field name, index (-1: singular)
+  Locator(std::string file, const TextFormat::ParseInfoTree& tree)
+      : file_(std::move(file)), tree_(tree) {}
+
+  std::string where(const Path& path) const {
+    const google::protobuf::Descriptor* type = v1::DaemonConfig::descriptor();
+    const TextFormat::ParseInfoTree* tree = &tree_;
+    std::string name;
+    TextFormat::ParseLocation location;
+    for (std::size_t i = 0; i < path.size(); ++i) {
+      const auto* field = type != nullptr ? type->FindFieldByName(path[i].first) : nullptr;
+      if (i > 0) name.push_back('.');
+      name.append(path[i].first);
+      if (path[i].second >= 0) {
+        name.push_back('[');
+        name.append(std::to_string(path[i].second));
+        name.push_back(']');
+      }
+      if (field == nullptr || tree == nullptr) continue;
+      if (i + 1 == path.size()) {
+        location = tree->GetLocation(field, path[i].second);
+      } else {
+        location = tree->GetLocation(field, path[i].second);
+        tree = tree->GetTreeForNested(field, path[i].second);
+        type = field->message_type();
+      }
+    }
+    std::string prefix = file_;
+    if (location.line >= 0) {
+      prefix.push_back(':');
+      prefix.append(std::to_string(location.line + 1));
+      prefix.push_back(':');
+      prefix.append(std::to_string(location.column + 1));
+    }
+    prefix.append(": ");
+    prefix.append(name);
+    return prefix;
+  }
+
+ private:
+  std::string file_;
+  const TextFormat::ParseInfoTree& tree_;
+};
+
+bool ipv4(const std::string& text) {
+  in_addr addr{};
+  return inet_pton(AF_INET, text.c_str(), &addr) == 1;
+}
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+/// Fails with "where: value is not in lo..hi" unless lo <= value <= hi.
+template <typename T>
+std::string out_of_range(const Locator& at, const Locator::Path& path, T value, T lo, T hi) {
+  if (value >= lo && value <= hi) return "";
+  return at.where(path) + ": " + number(static_cast<double>(value)) + " is not in " +
+         number(static_cast<double>(lo)) + ".." + number(static_cast<double>(hi));
+}
+
+std::string resolve(const std::string& path, const std::string& config_file) {
+  if (path.empty() || fs::path(path).is_absolute()) return path;
+  return (fs::path(config_file).parent_path() / path).lexically_normal().string();
+}
+
+std::string apply_modbus(const v1::ModbusConfig& m, const Locator& at, DaemonSettings& out) {
+  ModbusServerSettings& s = out.station.modbus;
+  MachineSettings& machine = out.station.machine;
+  if (m.has_bind_address()) {
+    if (!ipv4(m.bind_address())) {
+      return at.where({{"modbus", -1}, {"bind_address", -1}}) + ": '" + m.bind_address() +
+             "' is not an IPv4 address";
+    }
+    s.bind_address = m.bind_address();
+  }
+  for (int i = 0; i < m.allowed_clients_size(); ++i) {
+    if (!ipv4(m.allowed_clients(i))) {
+      return at.where({{"modbus", -1}, {"allowed_clients", i}}) + ": '" + m.allowed_clients(i) +
+             "' is not an IPv4 address";
+    }
+    s.allowed_clients.push_back(m.allowed_clients(i));
+  }
+  std::string e;
+  const auto path = [](const char* field) { return Locator::Path{{"modbus", -1}, {field, -1}}; };
+  if (m.has_port() && !(e = out_of_range(at, path("port"), m.port(), 0, 65535)).empty()) return e;
+  if (m.has_port()) s.port = m.port();
+  if (m.has_unit_id()) {
+    if (m.unit_id() != 255 &&
+        !(e = out_of_range(at, path("unit_id"), m.unit_id(), 1, 247)).empty()) {
+      return e;
+    }
+    s.unit_id = static_cast<std::uint8_t>(m.unit_id());
+  }
+  if (m.has_word_order()) {
+    out.station.word_order = m.word_order() == v1::ModbusConfig::CDAB ? regs::WordOrder::kCdab
+                                                                      : regs::WordOrder::kAbcd;
+  }
+  if (m.has_max_connections()) {
+    // libmodbus select()s on each client: keep the count small (notes section 2).
+    if (!(e = out_of_range(at, path("max_connections"), m.max_connections(), 1, 16)).empty()) {
+      return e;
+    }
+    s.max_connections = m.max_connections();
+  }
+  struct Seconds {
+    const char* name;
+    bool present;
+    double value;
+    double lo, hi;
+    double* target;
+  };
+  const Seconds seconds[] = {
+      {"idle_timeout_s", m.has_idle_timeout_s(), m.idle_timeout_s(), 1, 86400, &s.idle_timeout_s},
+      {"partial_frame_timeout_s", m.has_partial_frame_timeout_s(), m.partial_frame_timeout_s(),
+       0.01, 10, &s.partial_frame_timeout_s},
+      {"plc_heartbeat_timeout_s", m.has_plc_heartbeat_timeout_s(), m.plc_heartbeat_timeout_s(), 0,
+       3600, &machine.plc_heartbeat_timeout_s},
+      {"trigger_release_timeout_s", m.has_trigger_release_timeout_s(),
+       m.trigger_release_timeout_s(), 0.1, 3600, &machine.trigger_release_timeout_s},
+      {"result_ttl_s", m.has_result_ttl_s(), m.result_ttl_s(), 0, 86400, &machine.result_ttl_s},
+  };
+  for (const Seconds& field : seconds) {
+    if (!field.present) continue;
+    if (!(e = out_of_range(at, path(field.name), field.value, field.lo, field.hi)).empty()) {
+      return e;
+    }
+    *field.target = field.value;
+  }
+  if (m.has_auto_ack_on_trigger()) machine.auto_ack_on_trigger = m.auto_ack_on_trigger();
+  return "";
+}
+
+std::string apply_parts(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
+                        DaemonSettings& out) {
+  if (c.parts_size() == 0) return file + ": parts: the part catalogue is empty (add a parts { })";
+  std::set<int> seen;
+  for (int i = 0; i < c.parts_size(); ++i) {
+    const v1::PartConfig& p = c.parts(i);
+    std::string e = out_of_range(at, {{"parts", i}, {"part_id", -1}}, p.part_id(), 1, 65535);
+    if (!e.empty()) return e;
+    if (!seen.insert(p.part_id()).second) {
+      return at.where({{"parts", i}, {"part_id", -1}}) + ": " + std::to_string(p.part_id()) +
+             " appears twice in the catalogue";
+    }
+    const std::string cad = resolve(p.cad_file(), file);
+    if (cad.empty() || !fs::is_regular_file(cad)) {
+      return at.where({{"parts", i}, {"cad_file", -1}}) + ": '" + p.cad_file() +
+             "' is not a readable file" + (cad != p.cad_file() ? " (resolved to " + cad + ")" : "");
+    }
+    out.station.machine.known_parts.insert(static_cast<std::uint16_t>(p.part_id()));
+    out.parts.push_back(PartEntry{static_cast<std::uint16_t>(p.part_id()), p.name(), cad,
+                                  p.settings()});
+  }
+  return "";
+}
+
+std::string apply_top_level(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
+                            DaemonSettings& out) {
+  const v1::ScannerConfig& sc = c.scanner();
+  std::string e;
+  if (sc.has_vendor_id() &&
+      !(e = out_of_range(at, {{"scanner", -1}, {"vendor_id", -1}}, sc.vendor_id(), 0u, 0xFFFFu))
+           .empty()) {
+    return e;
+  }
+  if (sc.has_product_id() &&
+      !(e = out_of_range(at, {{"scanner", -1}, {"product_id", -1}}, sc.product_id(), 0u, 0xFFFFu))
+           .empty()) {
+    return e;
+  }
+  if (sc.has_timeout_s() &&
+      !(e = out_of_range(at, {{"scanner", -1}, {"timeout_s", -1}}, sc.timeout_s(), 0.1, 3600.0))
+           .empty()) {
+    return e;
+  }
+  out.scanner = sc;
+  if (c.has_report_dir()) {
+    if (c.report_dir().empty()) return at.where({{"report_dir", -1}}) + ": is empty";
+    out.station.reports.directory = resolve(c.report_dir(), file);
+  }
+  if (c.has_report_retention()) {
+    e = out_of_range(at, {{"report_retention", -1}}, c.report_retention(), 1, 10000000);
+    if (!e.empty()) return e;
+    out.station.reports.retention = c.report_retention();
+  }
+  if (c.has_model_cache_dir()) out.model_cache_dir = resolve(c.model_cache_dir(), file);
+  if (c.has_log_level()) {
+    const auto level = parse_log_level(c.log_level());
+    if (!level) {
+      return at.where({{"log_level", -1}}) + ": '" + c.log_level() +
+             "' is not one of debug, info, warning, error";
+    }
+    out.log_level = *level;
+  }
+  if (c.has_station_name()) out.station.runner.station_name = c.station_name();
+  return "";
+}
+
+}  // namespace
+
+Expected<DaemonSettings> parse_daemon_config(const std::string& text,
+                                             const std::string& file_name) {
+  v1::DaemonConfig config;
+  TextFormat::Parser parser;
+  FirstError errors;
+  TextFormat::ParseInfoTree tree;
+  parser.RecordErrorsTo(&errors);
+  parser.WriteLocationsTo(&tree);
+  if (!parser.ParseFromString(text, &config)) {
+    return fail(file_name + ":" + (errors.message().empty() ? "1:1: parse error" : errors.message()));
+  }
+  const Locator at(file_name, tree);
+  DaemonSettings settings;
+  std::string error = apply_modbus(config.modbus(), at, settings);
+  if (error.empty()) error = apply_parts(config, at, file_name, settings);
+  if (error.empty()) error = apply_top_level(config, at, file_name, settings);
+  if (!error.empty()) return fail(error);
+  return settings;
+}
+
+Expected<DaemonSettings> load_daemon_config(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return fail(path + ": cannot read the config file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_daemon_config(text.str(), path);
+}
+
+}  // namespace springscan::daemon

@@ -1,0 +1,101 @@
+#pragma once
+// The job runner: one worker thread that owns every call to the scanner, runs the analysis and
+// persists the report, so the event loop never waits on any of them (DESIGN.md "The daemon").
+// The scanner and the analysis are injected: the daemon passes the USB driver and
+// run_inspection with the part's cached model; tests pass their own.
+//
+// Results come back as events on a queue; wake_fd() (an eventfd) becomes readable when one is
+// waiting, so the loop can poll() it with the sockets.
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "analysis/expected.hpp"
+#include "analysis/pipeline.hpp"
+#include "daemon/log.hpp"
+#include "daemon/report_store.hpp"
+#include "daemon/result_block.hpp"
+#include "daemon/state_machine.hpp"
+#include "drivers/scanner.hpp"
+
+namespace springscan::daemon {
+
+/// Analyses one scan of part `part_id`. Called on the runner's thread, one call at a time.
+using AnalyzeFn = std::function<analysis::Expected<analysis::InspectionOutcome>(
+    std::uint16_t part_id, const analysis::PointCloud& scan)>;
+
+struct RunnerSettings {
+  std::string station_name = "springscan";  ///< written into every report
+  double probe_interval_s = 1.0;  ///< how often an idle runner checks (and reopens) the scanner
+};
+
+struct RunnerJob {
+  std::uint64_t record = 0;  ///< report store record number; RESULT_SEQ derives from it
+  JobRequest request;
+};
+
+struct RunnerEvent {
+  enum class Kind { kAcquired, kFinished };
+  Kind kind = Kind::kFinished;
+  std::uint64_t record = 0;
+  JobEnd end;          ///< kFinished only
+  ResultBlock block;   ///< kFinished and end.persisted only
+  std::string report_path;  ///< kFinished and end.persisted only
+};
+
+class JobRunner {
+ public:
+  /// `scanner`, `store` and `log` are not owned and must outlive the runner.
+  JobRunner(drivers::Scanner& scanner, AnalyzeFn analyze, ReportStore& store, Log& log,
+            RunnerSettings settings = {});
+  /// Cancels a running scan (through its progress callback), waits for the thread.
+  ~JobRunner();
+  JobRunner(const JobRunner&) = delete;
+  JobRunner& operator=(const JobRunner&) = delete;
+
+  /// Queues a job. Precondition: the previous job's kFinished event was taken.
+  void start(const RunnerJob& job);
+  /// The events since the last call, in order; clears wake_fd().
+  std::vector<RunnerEvent> take_events();
+  int wake_fd() const { return wake_fd_; }
+  /// The scanner's presence as last seen by the worker (it alone talks to the scanner).
+  bool scanner_online() const { return online_.load(); }
+  std::uint16_t progress_pct() const { return progress_pct_.load(); }
+
+ private:
+  void worker();
+  void run(const RunnerJob& job);
+  void probe_scanner();
+  void post(RunnerEvent event);
+  RunnerEvent finish(const RunnerJob& job, v1::InspectionReport report,
+                     const analysis::PointCloud* cloud, JobEnd end);
+
+  drivers::Scanner& scanner_;
+  AnalyzeFn analyze_;
+  ReportStore& store_;
+  Log& log_;
+  RunnerSettings settings_;
+  int wake_fd_ = -1;
+  std::mutex mutex_;
+  std::condition_variable wake_worker_;
+  std::optional<RunnerJob> pending_;
+  std::deque<RunnerEvent> events_;
+  bool stop_ = false;
+  std::atomic<bool> cancel_{false};
+  std::atomic<bool> online_{false};
+  std::atomic<std::uint16_t> progress_pct_{0};
+  std::thread thread_;
+};
+
+/// ERROR_DETAIL for a scan error message (the Scanner interface reports errors as text).
+regs::ErrorDetail classify_scan_error(const std::string& message);
+
+}  // namespace springscan::daemon

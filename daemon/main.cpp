@@ -1,0 +1,78 @@
+// springscand: the station daemon (DESIGN.md "The daemon"). The composition root: load the
+// config, build the scanner and the analysis, run the station until SIGTERM.
+//   springscand --config FILE [--check]
+#include <signal.h>
+#include <systemd/sd-daemon.h>
+
+#include <atomic>
+#include <cstring>
+#include <string>
+
+#include "daemon/config.hpp"
+#include "daemon/station.hpp"
+#include "daemon/wiring.hpp"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+void on_signal(int) { g_stop = true; }
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = 0;  // no SA_RESTART: poll() returns EINTR and the loop sees the flag
+  sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGINT, &action, nullptr);
+  signal(SIGPIPE, SIG_IGN);
+}
+
+int usage(const char* message) {
+  std::fprintf(stderr, "springscand: %s\nusage: springscand --config FILE [--check]\n", message);
+  return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace springscan::daemon;
+  std::string config_path;
+  bool check_only = false;
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--config") == 0 && i + 1 < argc) {
+      config_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--check") == 0) {
+      check_only = true;
+    } else {
+      return usage((std::string("unknown argument ") + argv[i]).c_str());
+    }
+  }
+  if (config_path.empty()) return usage("--config FILE is required");
+  Log log = Log::to_stderr(LogLevel::kInfo);
+  auto settings = load_daemon_config(config_path);
+  if (!settings) {
+    log.error("invalid config: " + settings.message());
+    return 2;
+  }
+  log.set_level(settings->log_level);
+  if (check_only) {
+    log.info(config_path + ": config OK");
+    return 0;
+  }
+  install_signal_handlers();
+  auto scanner = make_scanner(settings->scanner, log);
+  auto station = Station::create(settings->station, *scanner,
+                                 make_analysis(settings->parts, settings->model_cache_dir, log),
+                                 log, [](const std::string& message) {
+                                   sd_notify(0, message.c_str());
+                                 });
+  if (!station) {
+    log.error("cannot start: " + station.message());
+    sd_notify(0, ("STATUS=cannot start: " + station.message()).c_str());
+    return 1;
+  }
+  (*station)->run(g_stop);
+  log.info("springscand stopped");
+  return 0;
+}

@@ -1,0 +1,220 @@
+#include "daemon/report_store.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <google/protobuf/util/json_util.h>
+
+namespace springscan::daemon {
+
+namespace fs = std::filesystem;
+using analysis::Expected;
+using analysis::fail;
+
+namespace {
+
+constexpr const char* kTempPrefix = ".tmp-";
+
+std::string system_error(const std::string& what, const std::string& path) {
+  return what + " " + path + ": " + std::strerror(errno);
+}
+
+Expected<bool> fsync_path(const std::string& path, int flags) {
+  const int fd = ::open(path.c_str(), flags | O_CLOEXEC);
+  if (fd < 0) return fail(system_error("cannot open", path));
+  const bool ok = ::fsync(fd) == 0;
+  const std::string error = ok ? "" : system_error("fsync failed for", path);
+  ::close(fd);
+  if (!ok) return fail(error);
+  return true;
+}
+
+/// "r000000000042" -> 42; anything else -> 0.
+std::uint64_t record_number(const std::string& name) {
+  if (name.size() != 13 || name[0] != 'r') return 0;
+  std::uint64_t value = 0;
+  for (std::size_t i = 1; i < name.size(); ++i) {
+    if (name[i] < '0' || name[i] > '9') return 0;
+    value = value * 10 + static_cast<std::uint64_t>(name[i] - '0');
+  }
+  return value;
+}
+
+std::vector<std::uint64_t> list_records(const std::string& directory) {
+  std::vector<std::uint64_t> records;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(directory, ec)) {
+    const std::uint64_t n = record_number(entry.path().filename().string());
+    if (n != 0 && entry.is_directory(ec)) records.push_back(n);
+  }
+  std::sort(records.begin(), records.end());
+  return records;
+}
+
+// Blue (-scale) -> white (0) -> red (+scale): the usual deviation colour map.
+analysis::Rgb deviation_color(double deviation, double scale) {
+  const double t = scale > 0.0 ? std::clamp(deviation / scale, -1.0, 1.0) : 0.0;
+  const auto fade = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - std::abs(t))));
+  if (t >= 0.0) return {255, fade, fade};
+  return {fade, fade, 255};
+}
+
+template <typename T>
+void append_le(std::string& out, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));  // x86-64 and aarch64 are little-endian
+  out.append(bytes, sizeof(T));
+}
+
+}  // namespace
+
+Expected<bool> write_file_durably(const std::string& path, const std::string& bytes) {
+  const std::string temp = path + ".tmp";
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return fail(system_error("cannot create", temp));
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const std::string error = system_error("cannot write", temp);
+      ::close(fd);
+      ::unlink(temp.c_str());
+      return fail(error + " (disk full?)");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  const bool synced = ::fsync(fd) == 0;
+  const std::string sync_error = synced ? "" : system_error("fsync failed for", temp);
+  ::close(fd);
+  if (!synced || ::rename(temp.c_str(), path.c_str()) != 0) {
+    const std::string error = synced ? system_error("cannot rename onto", path) : sync_error;
+    ::unlink(temp.c_str());
+    return fail(error);
+  }
+  return fsync_path(fs::path(path).parent_path().string(), O_RDONLY | O_DIRECTORY);
+}
+
+ReportStore::ReportStore(ReportStoreSettings settings) : settings_(std::move(settings)) {}
+
+ReportStore::ReportStore(ReportStore&& other) noexcept
+    : settings_(std::move(other.settings_)), last_record_(other.last_record_) {}
+
+Expected<ReportStore> ReportStore::open(const ReportStoreSettings& settings) {
+  std::error_code ec;
+  fs::create_directories(settings.directory, ec);
+  if (ec || !fs::is_directory(settings.directory)) {
+    return fail("report_dir " + settings.directory + ": cannot create: " + ec.message());
+  }
+  // Interrupted writes (power loss, kill -9) left only hidden temporaries: drop them.
+  for (const auto& entry : fs::directory_iterator(settings.directory, ec)) {
+    if (entry.path().filename().string().rfind(kTempPrefix, 0) == 0) {
+      fs::remove_all(entry.path(), ec);
+    }
+  }
+  ReportStore store(settings);
+  const auto records = list_records(settings.directory);
+  store.last_record_ = records.empty() ? 0 : records.back();
+  return store;
+}
+
+std::uint64_t ReportStore::last_record() const {
+  std::lock_guard lock(mutex_);
+  return last_record_;
+}
+
+std::string ReportStore::record_path(std::uint64_t record) const {
+  char name[32];
+  std::snprintf(name, sizeof name, "r%012llu", static_cast<unsigned long long>(record));
+  return (fs::path(settings_.directory) / name).string();
+}
+
+Expected<std::optional<v1::InspectionReport>> ReportStore::load_latest() const {
+  const std::uint64_t record = last_record();
+  if (record == 0) return std::optional<v1::InspectionReport>{};
+  const std::string path = record_path(record) + "/report.pb";
+  std::ifstream in(path, std::ios::binary);
+  v1::InspectionReport report;
+  if (!in || !report.ParseFromIstream(&in)) return fail(path + ": unreadable report");
+  return std::optional<v1::InspectionReport>(std::move(report));
+}
+
+Expected<std::string> ReportStore::persist(std::uint64_t record,
+                                           const v1::InspectionReport& report,
+                                           const analysis::PointCloud* deviation_cloud) {
+  const std::string final_path = record_path(record);
+  const std::string temp =
+      (fs::path(settings_.directory) / (kTempPrefix + fs::path(final_path).filename().string()))
+          .string();
+  std::error_code ec;
+  fs::remove_all(temp, ec);
+  if (!fs::create_directory(temp, ec)) return fail("cannot create " + temp + ": " + ec.message());
+  std::string json;
+  google::protobuf::util::JsonPrintOptions options;
+  options.preserve_proto_field_names = true;
+  options.add_whitespace = true;
+  if (!google::protobuf::util::MessageToJsonString(report, &json, options).ok()) {
+    return fail("report for record " + std::to_string(record) + ": JSON conversion failed");
+  }
+  std::vector<std::pair<std::string, std::string>> files = {
+      {"report.pb", report.SerializeAsString()}, {"report.json", json}};
+  if (deviation_cloud != nullptr && !deviation_cloud->empty()) {
+    files.emplace_back("deviation.ply",
+                       deviation_ply(*deviation_cloud, report.deviation().color_scale_mm()));
+  }
+  for (const auto& [name, bytes] : files) {
+    auto written = write_file_durably(temp + "/" + name, bytes);
+    if (!written) return fail(written.message());
+  }
+  if (::rename(temp.c_str(), final_path.c_str()) != 0) {
+    return fail(system_error("cannot rename report into", final_path));
+  }
+  auto synced = fsync_path(settings_.directory, O_RDONLY | O_DIRECTORY);
+  if (!synced) return fail(synced.message());
+  {
+    std::lock_guard lock(mutex_);
+    last_record_ = std::max(last_record_, record);
+  }
+  apply_retention();
+  return final_path;
+}
+
+void ReportStore::apply_retention() {
+  const auto records = list_records(settings_.directory);
+  const auto keep = static_cast<std::size_t>(std::max(settings_.retention, 1));
+  std::error_code ec;
+  for (std::size_t i = 0; i + keep < records.size(); ++i) {
+    fs::remove_all(record_path(records[i]), ec);
+  }
+}
+
+std::string deviation_ply(const analysis::PointCloud& cloud, double color_scale_mm) {
+  std::ostringstream header;
+  header << "ply\nformat binary_little_endian 1.0\ncomment springscan deviation\n"
+         << "element vertex " << cloud.size() << "\n"
+         << "property float x\nproperty float y\nproperty float z\n"
+         << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+         << "property float deviation\nend_header\n";
+  std::string out = header.str();
+  out.reserve(out.size() + cloud.size() * 19);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const double d = cloud.has_scalars() ? cloud.scalars[i] : 0.0;
+    for (int k = 0; k < 3; ++k) append_le(out, static_cast<float>(cloud.points[i][k]));
+    const analysis::Rgb rgb = deviation_color(d, color_scale_mm);
+    for (std::uint8_t c : rgb) append_le(out, c);
+    append_le(out, static_cast<float>(d));
+  }
+  return out;
+}
+
+}  // namespace springscan::daemon

@@ -1,0 +1,164 @@
+#include "daemon/config.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "test_rig.hpp"
+
+namespace springscan::daemon {
+namespace {
+
+using testing::TempDir;
+
+class ConfigTest : public ::testing::Test {
+ protected:
+  ConfigTest() : dir_("springscan-config") { std::ofstream(dir_.str() + "/part.step") << "x"; }
+
+  analysis::Expected<DaemonSettings> parse(const std::string& text) {
+    return parse_daemon_config(text, dir_.str() + "/station.textproto");
+  }
+  std::string file() const { return dir_.str() + "/station.textproto"; }
+
+  TempDir dir_;
+};
+
+constexpr const char* kMinimal = "parts { part_id: 3 cad_file: \"part.step\" }\n";
+
+TEST_F(ConfigTest, DefaultsComeFromTheStructs) {
+  auto s = parse(kMinimal);
+  ASSERT_TRUE(s.ok()) << s.message();
+  const DaemonSettings defaults;
+  EXPECT_EQ(s->station.modbus.port, defaults.station.modbus.port);
+  EXPECT_EQ(s->station.modbus.port, 502);
+  EXPECT_EQ(s->station.word_order, regs::WordOrder::kAbcd);
+  EXPECT_DOUBLE_EQ(s->station.machine.plc_heartbeat_timeout_s, 3.0);
+  ASSERT_EQ(s->parts.size(), 1u);
+  EXPECT_EQ(s->parts[0].cad_file, dir_.str() + "/part.step");  // resolved against the config
+  EXPECT_EQ(s->station.machine.known_parts.count(3), 1u);
+}
+
+TEST_F(ConfigTest, EveryFieldIsApplied) {
+  auto s = parse(R"(
+modbus {
+  bind_address: "127.0.0.1"
+  port: 1502
+  allowed_clients: "10.0.0.5"
+  allowed_clients: "10.0.0.6"
+  unit_id: 17
+  word_order: CDAB
+  max_connections: 3
+  idle_timeout_s: 30
+  plc_heartbeat_timeout_s: 0
+  partial_frame_timeout_s: 0.25
+  trigger_release_timeout_s: 2
+  result_ttl_s: 0
+  auto_ack_on_trigger: true
+}
+scanner { kind: LASER_LINE vendor_id: 0x1d50 product_id: 0x6018 serial: "A1" timeout_s: 4 }
+parts { part_id: 3 name: "bracket" cad_file: "part.step"
+        settings { verdict { angle_tolerance_deg: 0.5 } } }
+report_dir: "reports"
+report_retention: 50
+log_level: "debug"
+station_name: "press 4"
+)");
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_EQ(s->station.modbus.bind_address, "127.0.0.1");
+  EXPECT_EQ(s->station.modbus.port, 1502);
+  EXPECT_EQ(s->station.modbus.allowed_clients.size(), 2u);
+  EXPECT_EQ(s->station.modbus.unit_id, 17);
+  EXPECT_EQ(s->station.word_order, regs::WordOrder::kCdab);
+  EXPECT_EQ(s->station.modbus.max_connections, 3);
+  EXPECT_DOUBLE_EQ(s->station.modbus.partial_frame_timeout_s, 0.25);
+  EXPECT_DOUBLE_EQ(s->station.machine.plc_heartbeat_timeout_s, 0.0);
+  EXPECT_DOUBLE_EQ(s->station.machine.trigger_release_timeout_s, 2.0);
+  EXPECT_TRUE(s->station.machine.auto_ack_on_trigger);
+  EXPECT_EQ(s->scanner.product_id(), 0x6018u);
+  EXPECT_DOUBLE_EQ(s->parts[0].settings.verdict().angle_tolerance_deg(), 0.5);
+  EXPECT_EQ(s->station.reports.directory, dir_.str() + "/reports");
+  EXPECT_EQ(s->station.reports.retention, 50);
+  EXPECT_EQ(s->log_level, LogLevel::kDebug);
+  EXPECT_EQ(s->station.runner.station_name, "press 4");
+}
+
+TEST_F(ConfigTest, SyntaxErrorNamesFileLineAndColumn) {
+  auto s = parse("modbus {\n  port: 1502\n  prot: 3\n}\n");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.message().rfind(file() + ":3:", 0), 0u) << s.message();
+  EXPECT_NE(s.message().find("prot"), std::string::npos);
+}
+
+TEST_F(ConfigTest, ValidationErrorNamesLineFieldAndValue) {
+  auto s = parse(std::string(kMinimal) + "modbus {\n  port: 70000\n}\n");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.message(), file() + ":3:3: modbus.port: 70000 is not in 0..65535");
+}
+
+TEST_F(ConfigTest, BadAllowListEntryNamesItsIndex) {
+  auto s = parse(std::string(kMinimal) +
+                 "modbus {\n  allowed_clients: \"10.0.0.1\"\n  allowed_clients: \"10.0.0\"\n}\n");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.message(),
+            file() + ":4:3: modbus.allowed_clients[1]: '10.0.0' is not an IPv4 address");
+}
+
+TEST_F(ConfigTest, PartCatalogueErrors) {
+  auto empty = parse("report_dir: \"x\"\n");
+  ASSERT_FALSE(empty.ok());
+  EXPECT_NE(empty.message().find("part catalogue is empty"), std::string::npos);
+  auto duplicate = parse(std::string(kMinimal) + kMinimal);
+  ASSERT_FALSE(duplicate.ok());
+  EXPECT_NE(duplicate.message().find(":2:9: parts[1].part_id: 3 appears twice"),
+            std::string::npos)
+      << duplicate.message();
+  auto missing = parse("parts { part_id: 4 cad_file: \"nope.step\" }\n");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.message().find("parts[0].cad_file: 'nope.step' is not a readable file"),
+            std::string::npos)
+      << missing.message();
+  auto zero = parse("parts { part_id: 0 cad_file: \"part.step\" }\n");
+  EXPECT_NE(zero.message().find("parts[0].part_id: 0 is not in 1..65535"), std::string::npos);
+}
+
+TEST_F(ConfigTest, OtherRangeErrors) {
+  EXPECT_NE(parse(std::string(kMinimal) + "log_level: \"loud\"").message().find(
+                "log_level: 'loud' is not one of"),
+            std::string::npos);
+  EXPECT_NE(parse(std::string(kMinimal) + "modbus { unit_id: 0 }").message().find(
+                "modbus.unit_id: 0 is not in 1..247"),
+            std::string::npos);
+  EXPECT_NE(parse(std::string(kMinimal) + "modbus { max_connections: 500 }").message().find(
+                "modbus.max_connections: 500"),
+            std::string::npos);
+  EXPECT_NE(parse(std::string(kMinimal) + "report_retention: 0").message().find(
+                "report_retention: 0 is not in"),
+            std::string::npos);
+  EXPECT_NE(parse(std::string(kMinimal) + "scanner { vendor_id: 70000 }").message().find(
+                "scanner.vendor_id: 70000"),
+            std::string::npos);
+}
+
+TEST_F(ConfigTest, MissingFileIsAnError) {
+  auto s = load_daemon_config(dir_.str() + "/absent.textproto");
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("absent.textproto: cannot read"), std::string::npos);
+}
+
+TEST_F(ConfigTest, ShippedConfigParses) {
+  // The shipped file names production CAD paths; point them at the test part.
+  std::ifstream in(std::string(SPRINGSCAN_SOURCE_DIR) + "/config/springscand.textproto");
+  ASSERT_TRUE(in.good());
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string local =
+      std::regex_replace(text.str(), std::regex("cad_file: \"[^\"]*\""), "cad_file: \"part.step\"");
+  auto s = parse(local);
+  ASSERT_TRUE(s.ok()) << s.message();
+  EXPECT_GE(s->parts.size(), 1u);
+}
+
+}  // namespace
+}  // namespace springscan::daemon

@@ -1,0 +1,213 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "daemon/register_image.hpp"
+#include "daemon/register_map.hpp"
+#include "daemon/result_block.hpp"
+
+namespace springscan::daemon {
+namespace {
+
+using regs::WordOrder;
+
+TEST(Int32Encoding, EndianProbeInBothWordOrders) {
+  std::uint16_t words[2];
+  regs::encode_int32(regs::kEndianProbeValue, WordOrder::kAbcd, words);
+  EXPECT_EQ(words[0], 0x0102);
+  EXPECT_EQ(words[1], 0x0304);
+  regs::encode_int32(regs::kEndianProbeValue, WordOrder::kCdab, words);
+  EXPECT_EQ(words[0], 0x0304);
+  EXPECT_EQ(words[1], 0x0102);
+}
+
+TEST(Int32Encoding, RoundTripsNegativeAndExtremeValues) {
+  for (const std::int32_t value : {0, 1, -1, -123456, 2147483647, -2147483647 - 1}) {
+    for (const WordOrder order : {WordOrder::kAbcd, WordOrder::kCdab}) {
+      std::uint16_t words[2];
+      regs::encode_int32(value, order, words);
+      EXPECT_EQ(regs::decode_int32(words, order), value);
+    }
+  }
+  std::uint16_t words[2];
+  regs::encode_int32(-2, WordOrder::kAbcd, words);  // two's complement: 0xFFFFFFFE
+  EXPECT_EQ(words[0], 0xFFFF);
+  EXPECT_EQ(words[1], 0xFFFE);
+}
+
+TEST(Scaling, MillimetresToMicrometresRoundsAndSaturates) {
+  EXPECT_EQ(regs::mm_to_um(1.2345), 1235);  // rounds to nearest (1234.5 -> 1235)
+  EXPECT_EQ(regs::mm_to_um(-0.0004), 0);
+  EXPECT_EQ(regs::mm_to_um(-0.0006), -1);
+  EXPECT_EQ(regs::mm_to_um(-2.5), -2500);
+  bool clipped = false;
+  EXPECT_EQ(regs::mm_to_um(1e9, &clipped), std::numeric_limits<std::int32_t>::max());
+  EXPECT_TRUE(clipped);
+  EXPECT_EQ(regs::mm_to_um(std::nan("")), regs::kInvalidInt32);
+  EXPECT_EQ(regs::deg_to_mdeg(-1.5), -1500);
+}
+
+TEST(ResultSeq, NeverZeroAndWraps) {
+  EXPECT_EQ(regs::result_seq_from_record(1), 1);
+  EXPECT_EQ(regs::result_seq_from_record(65535), 65535);
+  EXPECT_EQ(regs::result_seq_from_record(65536), 1);
+  EXPECT_EQ(regs::result_seq_from_record(131070), 65535);
+}
+
+ResultBlock example_block() {
+  ResultBlock block;
+  block.seq = 42;
+  block.part_id = 3;
+  block.job_id = 77;
+  block.code = regs::ResultCode::kFormNok;
+  block.max_deviation_mm = 0.8125;
+  block.rms_deviation_mm = 0.25;
+  block.p95_deviation_mm = 0.5;
+  block.cycle_time_ms = 1234;
+  block.scan_points = 200000;
+  block.bends = {{1, true, true, 0.5, 89.5}, {2, true, false, -2.25, 92.25}};
+  for (int i = 0; i < 300; ++i) {
+    block.vectors.push_back({0.001 * i, -0.002 * i, 0.5});
+  }
+  return block;
+}
+
+class RegisterImageTest : public ::testing::TestWithParam<WordOrder> {};
+
+TEST_P(RegisterImageTest, ResultBlockEncodesEveryField) {
+  const WordOrder order = GetParam();
+  RegisterImage image(order);
+  image.publish_result(example_block());
+  const auto ir = [&](std::uint16_t a) { return image.input_register(a); };
+  const auto i32 = [&](std::uint16_t a) {
+    const std::uint16_t w[2] = {ir(a), ir(static_cast<std::uint16_t>(a + 1))};
+    return regs::decode_int32(w, order);
+  };
+  EXPECT_EQ(ir(regs::kIrResultSeq), 42);
+  EXPECT_EQ(ir(regs::kIrResultPartId), 3);
+  EXPECT_EQ(ir(regs::kIrResultJobId), 77);
+  EXPECT_EQ(ir(regs::kIrResultCode), 1);
+  EXPECT_EQ(i32(regs::kIrMaxDeviation), 813);  // 812.5 rounds away from zero
+  EXPECT_EQ(i32(regs::kIrRmsDeviation), 250);
+  EXPECT_EQ(i32(regs::kIrP95Deviation), 500);
+  EXPECT_EQ(i32(regs::kIrCycleTimeMs), 1234);
+  EXPECT_EQ(i32(regs::kIrScanPoints), 200000);
+  EXPECT_EQ(ir(regs::kIrVectorCount), 300);
+  EXPECT_EQ(ir(regs::kIrVectorRecordSize), 8);
+  EXPECT_EQ(ir(regs::kIrBendCount), 2);
+  EXPECT_EQ(ir(regs::kIrBendsFailed), 1);
+  const std::uint16_t bend2 = regs::kIrBendTable + regs::kBendRecordSize;
+  EXPECT_EQ(ir(bend2 + regs::kBendId), 2);
+  EXPECT_EQ(ir(bend2 + regs::kBendFlags), regs::kBendMeasured);
+  EXPECT_EQ(i32(bend2 + regs::kBendSpringback), -2250);
+  EXPECT_EQ(i32(bend2 + regs::kBendMeasuredAngle), 92250);
+  const std::uint16_t v299 = regs::kIrVectors + 299 * regs::kVectorRecordSize;
+  EXPECT_EQ(ir(v299 + regs::kVectorIndex), 299);
+  EXPECT_EQ(ir(v299 + regs::kVectorFlags), regs::kVectorValid);
+  EXPECT_EQ(i32(v299 + regs::kVectorDx), 299);
+  EXPECT_EQ(i32(v299 + regs::kVectorDy), -598);
+  EXPECT_EQ(i32(v299 + regs::kVectorDz), 500);
+  EXPECT_EQ(ir(v299 + regs::kVectorRecordSize + regs::kVectorFlags), 0);  // past N: empty
+  // The FC03 mirror holds the same words.
+  EXPECT_EQ(image.holding_register(v299 + regs::kVectorDy + 1), ir(v299 + regs::kVectorDy + 1));
+  EXPECT_EQ(image.holding_register(regs::kIrResultSeq), 42);
+}
+
+TEST_P(RegisterImageTest, WindowShowsTheSelectedPage) {
+  RegisterImage image(GetParam());
+  image.publish_result(example_block());
+  image.mapping()->tab_registers[regs::kHrPageSelect] = 2;  // records 30..44
+  image.refresh_window();
+  EXPECT_EQ(image.input_register(regs::kIrWindowPage), 2);
+  EXPECT_EQ(image.input_register(regs::kIrWindowSeq), 42);
+  EXPECT_EQ(image.input_register(regs::kIrWindowRecords + regs::kVectorIndex), 30);
+  EXPECT_EQ(image.input_register(regs::kIrWindowRecords + 14 * 8 + regs::kVectorIndex), 44);
+  image.mapping()->tab_registers[regs::kHrPageSelect] = 65535;  // far past the block: zeros
+  image.refresh_window();
+  EXPECT_EQ(image.input_register(regs::kIrWindowRecords + regs::kVectorFlags), 0);
+}
+
+TEST_P(RegisterImageTest, StatusBitsWordAndLiveBlock) {
+  RegisterImage image(GetParam());
+  MachineStatus s;
+  s.state = regs::State::kDone;
+  s.ready = false;
+  s.result_valid = true;
+  s.part_ok = true;
+  s.scanner_online = true;
+  s.trigger_count = 9;
+  s.reject_code = regs::RejectCode::kBusy;
+  image.publish_status(s, LiveValues{4321, 15, 0});
+  EXPECT_TRUE(image.discrete_input(regs::kDiResultValid));
+  EXPECT_TRUE(image.discrete_input(regs::kDiPartOk));
+  EXPECT_FALSE(image.discrete_input(regs::kDiReady));
+  EXPECT_TRUE(image.discrete_input(regs::kDiHeartbeat));  // 15 / 10 is odd
+  EXPECT_EQ(image.input_register(regs::kIrStatusWord),
+            (1u << regs::kDiResultValid) | (1u << regs::kDiPartOk) |
+                (1u << regs::kDiScannerOnline) | (1u << regs::kDiHeartbeat));
+  EXPECT_EQ(image.input_register(regs::kIrBootId), 4321);
+  EXPECT_EQ(image.input_register(regs::kIrState), 6);
+  EXPECT_EQ(image.input_register(regs::kIrMapVersion), regs::kMapVersion);
+  EXPECT_EQ(image.input_register(regs::kIrRejectCode), 1);
+  EXPECT_EQ(image.holding_register(regs::kHrLiveMirror + regs::kIrTriggerCount), 9);
+  const std::uint16_t probe[2] = {image.input_register(regs::kIrEndianProbe),
+                                  image.input_register(regs::kIrEndianProbe + 1)};
+  EXPECT_EQ(regs::decode_int32(probe, GetParam()), regs::kEndianProbeValue);
+}
+
+TEST_P(RegisterImageTest, ControlWordAndCoilsAreOred) {
+  RegisterImage image(GetParam());
+  modbus_mapping_t* m = image.mapping();
+  m->tab_bits[regs::kCoilTriggerEnable] = 1;
+  m->tab_registers[regs::kHrControlWord] = 1u << regs::kCoilTrigger;
+  m->tab_registers[regs::kHrJobId] = 5;
+  m->tab_registers[regs::kHrPartId] = 6;
+  const PlcControl plc = image.plc_control();
+  EXPECT_TRUE(plc.trigger_enable);
+  EXPECT_TRUE(plc.trigger);
+  EXPECT_FALSE(plc.result_ack);
+  EXPECT_FALSE(plc.error_reset);
+  EXPECT_EQ(plc.job_id, 5);
+  EXPECT_EQ(plc.part_id, 6);
+}
+
+INSTANTIATE_TEST_SUITE_P(WordOrders, RegisterImageTest,
+                         ::testing::Values(WordOrder::kAbcd, WordOrder::kCdab));
+
+TEST(ResultBlockFromReport, FailedScanShowsInvalidDeviations) {
+  v1::InspectionReport report;
+  report.set_result_seq(5);
+  report.set_result_code(static_cast<std::uint32_t>(regs::ResultCode::kScanFailed));
+  report.mutable_input()->set_part_id("12");
+  report.mutable_deviation()->set_max(0.3);  // ignored: there was no analysis
+  const ResultBlock block = result_block_from_report(report);
+  EXPECT_EQ(block.part_id, 12);
+  EXPECT_EQ(block.code, regs::ResultCode::kScanFailed);
+  EXPECT_EQ(regs::mm_to_um(block.max_deviation_mm), regs::kInvalidInt32);
+}
+
+TEST(ResultBlockFromReport, AnalysedReportKeepsLargestMagnitudeAndBends) {
+  v1::InspectionReport report;
+  report.set_result_seq(6);
+  report.set_result_code(0);
+  report.mutable_deviation()->set_min(-1.5);
+  report.mutable_deviation()->set_max(0.7);
+  auto* bend = report.add_bends();
+  bend->set_id(4);
+  bend->set_springback_deg(1.25);
+  bend->set_measured(true);
+  bend->set_pass(true);
+  auto* c = report.add_compensation();
+  c->mutable_vector()->set_z(-0.1);
+  const ResultBlock block = result_block_from_report(report);
+  EXPECT_DOUBLE_EQ(block.max_deviation_mm, 1.5);
+  ASSERT_EQ(block.bends.size(), 1u);
+  EXPECT_EQ(block.bends[0].id, 4);
+  EXPECT_DOUBLE_EQ(block.bends[0].springback_deg, 1.25);
+  ASSERT_EQ(block.vectors.size(), 1u);
+  EXPECT_DOUBLE_EQ(block.vectors[0].dz_mm, -0.1);
+}
+
+}  // namespace
+}  // namespace springscan::daemon

@@ -1,0 +1,112 @@
+#include "daemon/report_store.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "test_rig.hpp"
+
+namespace springscan::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::TempDir;
+
+v1::InspectionReport report_with_seq(std::uint32_t seq) {
+  v1::InspectionReport r;
+  r.set_result_seq(seq);
+  r.mutable_verdict()->set_pass(true);
+  return r;
+}
+
+TEST(ReportStore, PersistsAllFilesAndReloadsTheNewest) {
+  TempDir dir("springscan-store");
+  auto store = ReportStore::open({dir.str(), 10});
+  ASSERT_TRUE(store.ok()) << store.message();
+  EXPECT_EQ(store->last_record(), 0u);
+  EXPECT_FALSE(store->load_latest()->has_value());
+  analysis::PointCloud cloud;
+  cloud.points = {{1, 2, 3}, {4, 5, 6}};
+  cloud.scalars = {0.1, -0.2};
+  auto path = store->persist(1, report_with_seq(1), &cloud);
+  ASSERT_TRUE(path.ok()) << path.message();
+  ASSERT_TRUE(store->persist(2, report_with_seq(2), nullptr).ok());
+  EXPECT_TRUE(fs::exists(*path + "/report.pb"));
+  EXPECT_TRUE(fs::exists(*path + "/report.json"));
+  // Binary PLY: header + 2 vertices of 3 floats, 3 bytes and 1 float.
+  const auto ply_size = fs::file_size(*path + "/deviation.ply");
+  std::ifstream ply(*path + "/deviation.ply");
+  std::string first;
+  std::getline(ply, first);
+  EXPECT_EQ(first, "ply");
+  EXPECT_GT(ply_size, 2u * 19u);
+  std::ifstream json(*path + "/report.json");
+  const std::string text((std::istreambuf_iterator<char>(json)), {});
+  EXPECT_NE(text.find("\"result_seq\": 1"), std::string::npos);
+  auto reopened = ReportStore::open({dir.str(), 10});
+  ASSERT_TRUE(reopened.ok());
+  EXPECT_EQ(reopened->last_record(), 2u);
+  auto latest = reopened->load_latest();
+  ASSERT_TRUE(latest.ok());
+  ASSERT_TRUE(latest->has_value());
+  EXPECT_EQ((*latest)->result_seq(), 2u);
+}
+
+TEST(ReportStore, InterruptedWritesAreRemovedAtOpen) {
+  TempDir dir("springscan-store-crash");
+  {
+    auto store = ReportStore::open({dir.str(), 10});
+    ASSERT_TRUE(store->persist(1, report_with_seq(1), nullptr).ok());
+  }
+  // What kill -9 during persist(2) leaves: a temporary directory with a partial file.
+  fs::create_directories(dir.str() + "/.tmp-r000000000002");
+  std::ofstream(dir.str() + "/.tmp-r000000000002/report.pb.tmp") << "half";
+  auto store = ReportStore::open({dir.str(), 10});
+  ASSERT_TRUE(store.ok());
+  EXPECT_FALSE(fs::exists(dir.str() + "/.tmp-r000000000002"));
+  EXPECT_EQ(store->last_record(), 1u);
+  EXPECT_EQ((*store->load_latest())->result_seq(), 1u);
+}
+
+TEST(ReportStore, RetentionKeepsTheNewest) {
+  TempDir dir("springscan-store-retention");
+  auto store = ReportStore::open({dir.str(), 3});
+  for (std::uint64_t k = 1; k <= 6; ++k) {
+    ASSERT_TRUE(store->persist(k, report_with_seq(static_cast<std::uint32_t>(k)), nullptr).ok());
+  }
+  int records = 0;
+  for (const auto& entry : fs::directory_iterator(dir.str())) {
+    (void)entry;
+    ++records;
+  }
+  EXPECT_EQ(records, 3);
+  EXPECT_FALSE(fs::exists(store->record_path(3)));
+  EXPECT_TRUE(fs::exists(store->record_path(4)));
+  EXPECT_TRUE(fs::exists(store->record_path(6)));
+}
+
+TEST(ReportStore, UnwritableDirectoryIsAnError) {
+  TempDir dir("springscan-store-file");
+  const std::string file = dir.str() + "/plain-file";
+  std::ofstream(file) << "x";
+  auto store = ReportStore::open({file + "/reports", 3});
+  ASSERT_FALSE(store.ok());
+  EXPECT_NE(store.message().find("report_dir"), std::string::npos);
+}
+
+TEST(WriteFileDurably, ReplacesContentAtomically) {
+  TempDir dir("springscan-durable");
+  const std::string path = dir.str() + "/f.txt";
+  ASSERT_TRUE(write_file_durably(path, "one").ok());
+  ASSERT_TRUE(write_file_durably(path, "two").ok());
+  std::ifstream in(path);
+  std::string text;
+  in >> text;
+  EXPECT_EQ(text, "two");
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
+  EXPECT_FALSE(write_file_durably(dir.str() + "/missing/f.txt", "x").ok());
+}
+
+}  // namespace
+}  // namespace springscan::daemon
