@@ -1,0 +1,73 @@
+// Local fits and the bend table for a hat-profile scan (issue 5 budget: 1M points in 150 ms
+// on 2 cores). The scan is simulated once, already in the CAD frame with a small pose error
+// left over from the global fit; each iteration runs measure_springback on it.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <numbers>
+
+#include "analysis/sheet_part.hpp"
+#include "analysis/springback.hpp"
+
+namespace {
+
+using namespace springscan::analysis;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+const std::vector<double> kSpringbackDeg = {1.2, 2.0, -0.4, 1.6};
+
+struct Fixture {
+  PartModel model;
+  PointCloud scan;
+};
+
+const Fixture& fixture(std::int64_t points) {
+  static std::unique_ptr<Fixture> cached;
+  static std::int64_t cached_points = -1;
+  if (cached_points == points) return *cached;
+  const ProfileSpec spec = hat_profile(30, 40, 60, 90, 4);
+  auto model = profile_part_model(spec, {.sample_count = 40000});
+  ScanSimulationSettings st;
+  st.point_count = points;
+  st.noise_sigma_mm = 0.02;
+  st.T_scan_part = Eigen::Translation3d(0.2, -0.1, 0.15) *
+                   Eigen::AngleAxisd(0.3 * kDeg, Vec3(1, 2, 3).normalized());
+  auto scan = simulate_scan(spec, kSpringbackDeg, st);
+  cached = std::make_unique<Fixture>(Fixture{std::move(model).value(), std::move(scan).value()});
+  cached_points = points;
+  return *cached;
+}
+
+void BM_MeasureSpringback(benchmark::State& state) {
+  const Fixture& f = fixture(state.range(0));
+  SpringbackSettings settings;
+  settings.threads = static_cast<int>(state.range(1));
+  settings.max_scan_points = state.range(2);
+  double worst_error = 0.0;
+  for (auto _ : state) {
+    const auto result = measure_springback(f.model, f.scan, settings);
+    if (!result) {
+      state.SkipWithError(result.message().c_str());
+      return;
+    }
+    for (std::size_t b = 0; b < result->bends.size(); ++b)
+      worst_error = std::max(worst_error,
+                             std::abs(result->bends[b].springback_deg - kSpringbackDeg[b]));
+  }
+  state.counters["worst_error_deg"] = worst_error;
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+// Args: scan points, threads, max_scan_points (0 = every point).
+BENCHMARK(BM_MeasureSpringback)
+    ->Args({200'000, 2, 100'000})
+    ->Args({1'000'000, 1, 100'000})
+    ->Args({1'000'000, 2, 100'000})
+    ->Args({1'000'000, 2, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
