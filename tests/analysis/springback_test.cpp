@@ -6,6 +6,7 @@
 #include <numbers>
 #include <random>
 
+#include "analysis/global_fit.hpp"
 #include "analysis/sheet_part.hpp"
 
 namespace springscan::analysis {
@@ -48,20 +49,21 @@ Transform random_pose(std::mt19937& rng, double angle_rad, double shift_mm) {
 }
 
 // The scan of the produced part in a random scanner pose, brought back into the CAD frame
-// with a small pose error and refined by point-to-plane ICP over all points (the global fit).
+// with a pose error of 2 deg and 2 mm and refined by the global fit (ICP; no PCA, whose
+// candidates would be ambiguous on the symmetric U and hat profiles).
 PointCloud scan_in_cad(const Case& c, const PartModel& model, ScanSimulationSettings st,
                        std::mt19937& rng) {
   st.T_scan_part = random_pose(rng, 2.0, 200.0);
   const auto scan = simulate_scan(c.spec, c.springback_deg, st);
   EXPECT_TRUE(scan.ok()) << scan.message();
-  const Transform start = random_pose(rng, 0.3 * kDeg, 0.3) * st.T_scan_part.inverse();
-  PointCloud cloud = transformed(*scan, start);
-  std::vector<std::uint32_t> all(cloud.size());
-  for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
-  const LocalFitTarget target(model);
-  const auto global = local_fit(target, cloud, all);
+  const Transform start = random_pose(rng, 2.0 * kDeg, 2.0) * st.T_scan_part.inverse();
+  const PointCloud cloud = transformed(*scan, start);
+  const KdTree tree(model.samples.points);
+  GlobalFitSettings settings;
+  settings.pca_initial_alignment = false;
+  const auto global = global_fit(cloud.points, tree, model.samples.normals, settings);
   EXPECT_TRUE(global.ok()) << global.message();
-  return transformed(cloud, global->T_model_subset);
+  return transformed(cloud, global->T_cad_scan);
 }
 
 void expect_springback(char kind, int trials, const ScanSimulationSettings& st, double tol_deg,
