@@ -13,7 +13,10 @@
 #include <Message_Messenger.hxx>
 #include <Message_PrinterOStream.hxx>
 #include <STEPControl_Reader.hxx>
+#include <ShapeAnalysis_FreeBounds.hxx>
 #include <ShapeFix_Shape.hxx>
+#include <ShapeFix_Solid.hxx>
+#include <TopoDS_Solid.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
@@ -86,6 +89,23 @@ double bbox_diagonal(const TopoDS_Shape& shape) {
   return std::sqrt(box.SquareExtent());
 }
 
+// A sewn shell without free edges bounds a volume: made a solid (outward oriented by
+// ShapeFix_Solid), so that sheet parts from IGES are segmented like the same part from STEP.
+TopoDS_Shape close_into_solids(const TopoDS_Shape& shape) {
+  TopTools_IndexedMapOfShape shells;
+  TopExp::MapShapes(shape, TopAbs_SHELL, shells);
+  if (shells.Extent() != 1 || TopExp_Explorer(shape, TopAbs_SOLID).More()) return shape;
+  const TopoDS_Shell& shell = TopoDS::Shell(shells(1));
+  ShapeAnalysis_FreeBounds bounds(shell);
+  if (!bounds.GetClosedWires().IsNull() && TopExp_Explorer(bounds.GetClosedWires(), TopAbs_EDGE).More())
+    return shape;
+  if (!bounds.GetOpenWires().IsNull() && TopExp_Explorer(bounds.GetOpenWires(), TopAbs_EDGE).More())
+    return shape;
+  ShapeFix_Solid fix;
+  const TopoDS_Solid solid = fix.SolidFromShell(shell);
+  return solid.IsNull() ? shape : TopoDS_Shape(solid);
+}
+
 // Sewing and healing: loose faces (IGES trimmed surfaces) become shells; ShapeFix_Shape repairs
 // wires, tolerances and orientations so that adjacency and sampling see a consistent shape.
 TopoDS_Shape sew_and_heal(TopoDS_Shape shape, const CadImportSettings& settings,
@@ -99,6 +119,7 @@ TopoDS_Shape sew_and_heal(TopoDS_Shape shape, const CadImportSettings& settings,
       report.sewn = true;
     }
   }
+  if (report.sewn) shape = close_into_solids(shape);
   if (settings.heal) {
     ShapeFix_Shape fix(shape);
     fix.SetPrecision(settings.sewing_tolerance_mm * 0.1);
