@@ -12,6 +12,7 @@
 #include "analysis/parallel.hpp"
 #include "analysis/reduction.hpp"
 #include "analysis/settings_proto.hpp"
+#include "analysis/springback_proto.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -28,6 +29,7 @@ struct PipelineSettings {
   ReductionSettings reduction;
   GlobalFitSettings global_fit;
   DeviationSettings deviation;
+  SpringbackSettings springback;
   int threads = 0;
 };
 
@@ -38,17 +40,28 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto reduction = from_proto(m.reduction());
   auto fit = from_proto(m.registration());
   auto deviation = from_proto(m.deviation());
+  auto springback = from_proto(m.local_fit());
   for (const std::string* error : {threads ? nullptr : &threads.message(),
                                    normals ? nullptr : &normals.message(),
                                    reduction ? nullptr : &reduction.message(),
                                    fit ? nullptr : &fit.message(),
-                                   deviation ? nullptr : &deviation.message()})
+                                   deviation ? nullptr : &deviation.message(),
+                                   springback ? nullptr : &springback.message()})
     if (error) return fail(*error);
   s.threads = *threads;
   s.normals = *normals;
   s.reduction = *reduction;
   s.global_fit = *fit;
   s.deviation = *deviation;
+  s.springback = *springback;
+  // The per-bend pass uses the verdict's angle tolerance (--angle-tolerance, settings file).
+  if (m.verdict().has_angle_tolerance_deg()) {
+    if (!(m.verdict().angle_tolerance_deg() > 0.0))
+      return fail("settings: verdict.angle_tolerance_deg = " +
+                  std::to_string(m.verdict().angle_tolerance_deg()) + " (must be > 0)");
+    s.springback.angle_tolerance_deg = m.verdict().angle_tolerance_deg();
+  }
+  s.springback.threads = s.threads;
   s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
   s.deviation.threads = s.reduction.curvature.threads = s.threads;
   return s;
@@ -62,6 +75,7 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   to_proto(s.reduction, out->mutable_reduction());
   to_proto(s.global_fit, out->mutable_registration());
   to_proto(s.deviation, out->mutable_deviation());
+  to_proto(s.springback, out->mutable_local_fit());
   out->set_threads(s.threads);
 }
 
@@ -100,6 +114,22 @@ PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviat
   for (std::size_t i = 0; i < scan_in_cad.size(); ++i)
     scan_in_cad.colors[i] = deviation_color(scan_in_cad.scalars[i], color_scale_mm);
   return scan_in_cad;
+}
+
+// Stages 6-7: local best fits of the CAD flanges and the bend table (docs/springback.md). A
+// model without flanges has no bends to measure; a model the stage cannot use (no face ids)
+// gives a warning rather than failing the whole inspection.
+void add_bend_table(const PartModel& model, const PointCloud& scan_in_cad,
+                    const SpringbackSettings& settings, v1::InspectionReport& report) {
+  if (model.segmentation.flanges.empty()) return;
+  const auto result = measure_springback(model, scan_in_cad, settings);
+  if (!result) {
+    report.add_warnings(result.message());
+    return;
+  }
+  fill_springback_report(*result, report);
+  for (const BendMeasurement& bend : result->bends)
+    if (!bend.measured) report.add_warnings(bend.status);
 }
 
 }  // namespace
@@ -146,7 +176,12 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                                         report.deviation().color_scale_mm());
   timings.set_deviation(ms_since(t));
 
-  // 6-9. Local fits and springback, deformation field, compensation, verdict: added here.
+  t = Clock::now();
+  // 6-7. Local best fits per flange and springback per bend (paper §4, automated).
+  add_bend_table(model, out.deviation_cloud, config->springback, report);
+  timings.set_local_fits(ms_since(t));
+
+  // 8-9. Deformation field, compensation, verdict: added here.
 
   timings.set_total(ms_since(start));
   return out;

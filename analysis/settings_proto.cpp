@@ -123,6 +123,28 @@ Expected<DeviationSettings> from_proto(const v1::DeviationSettings& m) {
   return s;
 }
 
+Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& m) {
+  SpringbackSettings s;
+  if (m.has_bend_margin_mm()) {
+    if (!in_range(m.bend_margin_mm(), 0.0, 1000.0))
+      return bad("local_fit.bend_margin_mm", m.bend_margin_mm(), "0 to 1000");
+    s.bend_margin_mm = m.bend_margin_mm();
+  }
+  if (m.has_max_iterations()) {
+    if (m.max_iterations() < 1 || m.max_iterations() > 10000)
+      return bad("local_fit.max_iterations", m.max_iterations(), "1 to 10000");
+    s.local_fit.max_iterations = m.max_iterations();
+  }
+  if (m.has_max_correspondence_distance_mm()) {
+    if (!in_range(m.max_correspondence_distance_mm(), 1e-6, 1e6))
+      return bad("local_fit.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
+                 "must be > 0");
+    s.local_fit.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
+    s.assignment_distance_mm = m.max_correspondence_distance_mm();
+  }
+  return s;
+}
+
 Expected<int> threads_from_proto(const v1::AnalysisSettings& m) {
   if (!m.has_threads()) return 0;
   if (m.threads() < 0 || m.threads() > 1024) return bad("threads", m.threads(), "0 to 1024");
@@ -158,6 +180,12 @@ void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {
 
 void to_proto(const DeviationSettings& s, v1::DeviationSettings* m) {
   m->set_tolerance_mm(s.tolerance_mm);
+}
+
+void to_proto(const SpringbackSettings& s, v1::LocalFitSettings* m) {
+  m->set_bend_margin_mm(s.bend_margin_mm);
+  m->set_max_iterations(s.local_fit.max_iterations);
+  m->set_max_correspondence_distance_mm(s.local_fit.max_correspondence_distance_mm);
 }
 
 }  // namespace springscan::analysis

@@ -10,6 +10,7 @@
 #include "analysis/global_fit.hpp"
 #include "analysis/normals.hpp"
 #include "analysis/reduction.hpp"
+#include "analysis/springback.hpp"
 #include "proto/springscan.pb.h"
 
 namespace springscan::analysis {
@@ -25,6 +26,10 @@ Expected<ReductionSettings> from_proto(const v1::ReductionSettings& message);
 Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& message);
 /// deviation.tolerance_mm (> 0).
 Expected<DeviationSettings> from_proto(const v1::DeviationSettings& message);
+/// local_fit.bend_margin_mm (0 to 1000), max_iterations (1 to 10000),
+/// max_correspondence_distance_mm (> 0; also the distance up to which scan points are
+/// assigned to flanges). The angle tolerance comes from verdict.angle_tolerance_deg.
+Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& message);
 /// threads (0..1024; 0 = all cores).
 Expected<int> threads_from_proto(const v1::AnalysisSettings& message);
 
@@ -33,5 +38,6 @@ void to_proto(const NormalSettings& settings, v1::NormalSettings* message);
 void to_proto(const ReductionSettings& settings, v1::ReductionSettings* message);
 void to_proto(const GlobalFitSettings& settings, v1::RegistrationSettings* message);
 void to_proto(const DeviationSettings& settings, v1::DeviationSettings* message);
+void to_proto(const SpringbackSettings& settings, v1::LocalFitSettings* message);
 
 }  // namespace springscan::analysis

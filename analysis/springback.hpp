@@ -25,12 +25,14 @@ struct SpringbackSettings {
   LocalFitSettings local_fit;           ///< each flange's local best fit (threads: see below)
   double bend_margin_mm = 2.0;          ///< flange samples this close to a bend are left out
   double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
-  double angle_tolerance_deg = 0.5;     ///< a bend passes when |springback| <= this
+  double angle_tolerance_deg = 1.0;     ///< a bend passes when |springback| <= this (the
+                                        ///< pipeline copies verdict.angle_tolerance_deg)
   int min_points_per_flange = 200;      ///< fewer: not fitted, its bends are not measured
-  std::int64_t max_scan_points =
-      100000;       ///< the scan is thinned by a fixed stride to this (0: all)
-  int threads = 0;  ///< worker threads, 0 = all cores (overrides local_fit.threads); no effect
-                    ///< on the result
+  /// The scan is thinned by a fixed stride to at most this many points (0: every point).
+  std::int64_t max_scan_points = 100000;
+  /// Worker threads, 0 = all cores (overrides local_fit.threads); the result does not depend
+  /// on it.
+  int threads = 0;
 };
 
 /// One flange's points and local best fit.
