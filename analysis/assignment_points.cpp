@@ -45,8 +45,9 @@ CandidateGraph knn_graph(const std::vector<Vec3>& rows, const KdTree& tree, std:
 }
 
 // The certificate over all pairs: the structural part and slackness through the graph of the
-// matched pairs, dual feasibility through radius searches (pairs beyond sqrt(u_i + tol) have
-// c_ij > u_i + tol >= u_i + v_j). Violating pairs are appended to `violations` if given.
+// matched pairs; dual feasibility u_i <= min_j (c_ij - v_j) by one additively weighted nearest
+// neighbour query per row, with weights -v_j >= 0 (docs/matching.md "Global certificate").
+// Violating pairs are appended to `violations` if given.
 CertificateCheck scan_certificate(const std::vector<Vec3>& rows, const KdTree& tree,
                                   const Assignment& a, double tolerance,
                                   std::vector<Edge>* violations) {
@@ -56,28 +57,32 @@ CertificateCheck scan_certificate(const std::vector<Vec3>& rows, const KdTree& t
       const std::int32_t j = a.row_to_col[i];
       if (j >= 0 && static_cast<std::size_t>(j) < tree.size()) {
         matched.col_index.push_back(j);
-        matched.costs.push_back((rows[i] - tree.points()[static_cast<std::size_t>(j)]).squaredNorm());
+        matched.costs.push_back(
+            (rows[i] - tree.points()[static_cast<std::size_t>(j)]).squaredNorm());
       }
       matched.row_offsets.push_back(matched.col_index.size());
     }
   }
   CertificateCheck check = check_certificate(matched, a, tolerance);
-  if (!check.ok) return check;
-  std::vector<Neighbor> near;
+  if (!check.ok || rows.empty()) return check;
+  // v_j <= tolerance was checked above; clamp the rounding noise so the weights are >= 0.
+  std::vector<double> weights(a.v.size());
+  for (std::size_t j = 0; j < a.v.size(); ++j) weights[j] = std::max(0.0, -a.v[j]);
+  const WeightedKdTree weighted(tree.points(), weights);
+  std::vector<Neighbor> below;
   for (std::size_t i = 0; i < rows.size(); ++i) {
-    const double reach = a.u[i] + tolerance;
-    if (!(reach > 0.0)) continue;
-    tree.radius(rows[i], std::sqrt(reach), near);
-    for (const Neighbor& nb : near) {
-      const double violation = a.u[i] + a.v[nb.index] - nb.squared_distance;
-      check.max_dual_violation = std::max(check.max_dual_violation, violation);
-      if (violation <= tolerance) continue;
-      if (check.ok) {
-        check.ok = false;
-        check.failure = "dual: pair (" + std::to_string(i) + ", " + std::to_string(nb.index) +
-                        ") violates u + v <= c by " + std::to_string(violation);
-      }
-      if (violations == nullptr) return check;
+    const auto best = weighted.nearest(rows[i]);
+    const double violation = best ? a.u[i] - best->squared_distance : 0.0;
+    check.max_dual_violation = std::max(check.max_dual_violation, violation);
+    if (violation <= tolerance) continue;
+    if (check.ok) {
+      check.ok = false;
+      check.failure = "dual: pair (" + std::to_string(i) + ", " + std::to_string(best->index) +
+                      ") violates u + v <= c by " + std::to_string(violation);
+    }
+    if (violations == nullptr) return check;
+    weighted.below(rows[i], a.u[i] - tolerance, below);
+    for (const Neighbor& nb : below) {
       violations->emplace_back(static_cast<std::int32_t>(i), static_cast<std::int32_t>(nb.index));
     }
   }

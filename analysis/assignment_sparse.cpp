@@ -139,6 +139,44 @@ bool augment_from(const CandidateGraph& g, std::int32_t start, Assignment& a,
   return sink >= 0;
 }
 
+void reset(Assignment& a) {
+  std::fill(a.row_to_col.begin(), a.row_to_col.end(), -1);
+  std::fill(a.col_to_row.begin(), a.col_to_row.end(), -1);
+  std::fill(a.v.begin(), a.v.end(), 0.0);
+  std::fill(a.u.begin(), a.u.end(), 0.0);
+}
+
+// Warm start (docs/matching.md "Warm start"): for square graphs an epsilon-scaling auction
+// sets near-optimal column potentials and its tight rows are kept; otherwise greedy row
+// reduction. Then Jonker-Volgenant augmenting row reduction for the rows still free. Every
+// step keeps v <= 0, v = 0 on unused columns and assigned rows tight.
+void warm_start(const CandidateGraph& g, Assignment& a) {
+  const auto scan_row = [&g](std::size_t i, auto&& visit) {
+    for (std::size_t e = g.row_offsets[i]; e < g.row_offsets[i + 1]; ++e) {
+      visit(static_cast<std::size_t>(g.col_index[e]), g.costs[e]);
+    }
+  };
+  bool auctioned = false;
+  if (g.rows == g.cols && g.rows > 1 && g.edge_count() > 0) {
+    const auto [lo, hi] = std::minmax_element(g.costs.begin(), g.costs.end());
+    const double range = *hi - *lo;
+    if (range > 0.0) {
+      auctioned = detail::epsilon_scaling_auction(g.rows, scan_row, range / 8.0, range * 1e-7,
+                                                  8.0, range, 64 * g.rows + 1024, a);
+      if (auctioned) {
+        detail::tighten_rows(g.rows, scan_row, a);
+      } else {
+        reset(a);
+      }
+    }
+  }
+  if (!auctioned) row_reduction(g, a);
+  if (!detail::augmenting_row_reduction(g.rows, scan_row, a)) {
+    reset(a);
+    row_reduction(g, a);
+  }
+}
+
 }  // namespace
 
 Expected<Assignment> solve_sparse(const CandidateGraph& graph) {
@@ -150,19 +188,7 @@ Expected<Assignment> solve_sparse(const CandidateGraph& graph) {
   a.col_to_row.assign(graph.cols, -1);
   a.u.assign(graph.rows, 0.0);
   a.v.assign(graph.cols, 0.0);
-  // Warm start: greedy row reduction, then Jonker-Volgenant augmenting row reduction.
-  row_reduction(graph, a);
-  const auto scan_row = [&graph](std::size_t i, auto&& visit) {
-    for (std::size_t e = graph.row_offsets[i]; e < graph.row_offsets[i + 1]; ++e) {
-      visit(static_cast<std::size_t>(graph.col_index[e]), graph.costs[e]);
-    }
-  };
-  if (!detail::augmenting_row_reduction(graph.rows, scan_row, a)) {
-    std::fill(a.row_to_col.begin(), a.row_to_col.end(), -1);
-    std::fill(a.col_to_row.begin(), a.col_to_row.end(), -1);
-    std::fill(a.v.begin(), a.v.end(), 0.0);
-    row_reduction(graph, a);
-  }
+  warm_start(graph, a);
 
   SparseWorkspace w;
   w.dist.assign(graph.cols, kInf);

@@ -4,6 +4,9 @@
 
 #include <cmath>
 
+#include <array>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 namespace springscan::analysis {
@@ -110,6 +113,95 @@ void KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out
   impl_->index.radiusSearch(query.data(), r2, found, nanoflann::SearchParams(32, 0.0f, true));
   out.reserve(found.size());
   for (const auto& [index, d2] : found) out.push_back({index, d2});
+}
+
+// ---- WeightedKdTree: (p, sqrt(w)) in 4-D --------------------------------------------------
+
+namespace {
+
+struct Lifted {
+  std::vector<std::array<double, 4>> points;
+  std::size_t kdtree_get_point_count() const { return points.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i][dim]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+using LiftedIndex =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Lifted, double,
+                                                                     std::uint32_t>,
+                                        Lifted, 4, std::uint32_t>;
+
+Lifted lift(const std::vector<Vec3>& points, const std::vector<double>& weights) {
+  if (points.size() != weights.size()) {
+    throw std::invalid_argument("WeightedKdTree: " + std::to_string(points.size()) +
+                                " points but " + std::to_string(weights.size()) + " weights");
+  }
+  Lifted lifted;
+  lifted.points.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!(weights[i] >= 0.0) || !std::isfinite(weights[i])) {
+      throw std::invalid_argument("WeightedKdTree: weight " + std::to_string(i) + " = " +
+                                  std::to_string(weights[i]) + " (must be finite and >= 0)");
+    }
+    lifted.points.push_back({points[i].x(), points[i].y(), points[i].z(), std::sqrt(weights[i])});
+  }
+  return lifted;
+}
+
+}  // namespace
+
+struct WeightedKdTree::Impl {
+  Impl(const std::vector<Vec3>& p, const std::vector<double>& w, const KdTreeSettings& settings)
+      : points(p), weights(w), lifted(lift(p, w)),
+        index(4, lifted,
+              nanoflann::KDTreeSingleIndexAdaptorParams(
+                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {}
+  // The exact weighted distance (the lifted one squares a rounded square root).
+  double value(const Vec3& q, std::uint32_t j) const {
+    return (q - points[j]).squaredNorm() + weights[j];
+  }
+  std::vector<Vec3> points;
+  std::vector<double> weights;
+  Lifted lifted;
+  LiftedIndex index;
+};
+
+WeightedKdTree::WeightedKdTree(const std::vector<Vec3>& points, const std::vector<double>& weights,
+                               const KdTreeSettings& settings)
+    : impl_(std::make_unique<Impl>(points, weights, settings)) {}
+WeightedKdTree::~WeightedKdTree() = default;
+WeightedKdTree::WeightedKdTree(WeightedKdTree&&) noexcept = default;
+WeightedKdTree& WeightedKdTree::operator=(WeightedKdTree&&) noexcept = default;
+
+std::size_t WeightedKdTree::size() const { return impl_->points.size(); }
+
+std::optional<Neighbor> WeightedKdTree::nearest(const Vec3& query) const {
+  if (size() == 0) return std::nullopt;
+  const double q[4] = {query.x(), query.y(), query.z(), 0.0};
+  std::uint32_t index = 0;
+  double d2 = 0.0;
+  nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> result(1);
+  result.init(&index, &d2);
+  impl_->index.findNeighbors(result, q, nanoflann::SearchParams());
+  return Neighbor{index, impl_->value(query, index)};
+}
+
+void WeightedKdTree::below(const Vec3& query, double bound, std::vector<Neighbor>& out) const {
+  out.clear();
+  if (size() == 0 || !(bound > 0.0)) return;
+  const double q[4] = {query.x(), query.y(), query.z(), 0.0};
+  std::vector<std::pair<std::uint32_t, double>> found;
+  // Widened by a relative 1e-12 so rounding in the lifted distance cannot hide a point; the
+  // exact value then decides.
+  impl_->index.radiusSearch(q, bound * (1.0 + 1e-12), found,
+                            nanoflann::SearchParams(32, 0.0f, false));
+  for (const auto& [index, lifted_d2] : found) {
+    const double exact = impl_->value(query, index);
+    if (exact < bound) out.push_back({index, exact});
+  }
 }
 
 }  // namespace springscan::analysis

@@ -59,4 +59,32 @@ class KdTree {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Points with a non-negative weight each, searched by the additively weighted squared distance
+/// |q - p_j|^2 + w_j. Lifting p_j to (p_j, sqrt(w_j)) in 4-D makes that an ordinary squared
+/// distance from (q, 0), so the KD-tree bounds stay exact. The matching certificate uses it
+/// (assignment_points.cpp). Owns its data; thread safety as KdTree.
+class WeightedKdTree {
+ public:
+  /// Throws std::invalid_argument if the sizes differ or a weight is negative or not finite.
+  WeightedKdTree(const std::vector<Vec3>& points, const std::vector<double>& weights,
+                 const KdTreeSettings& settings = {});
+  ~WeightedKdTree();
+  WeightedKdTree(WeightedKdTree&&) noexcept;
+  WeightedKdTree& operator=(WeightedKdTree&&) noexcept;
+  WeightedKdTree(const WeightedKdTree&) = delete;
+  WeightedKdTree& operator=(const WeightedKdTree&) = delete;
+
+  std::size_t size() const;
+
+  /// The point minimising |query - p_j|^2 + w_j, with that value; nothing on an empty tree.
+  std::optional<Neighbor> nearest(const Vec3& query) const;
+
+  /// Every point with |query - p_j|^2 + w_j < bound, unsorted. `out` is overwritten.
+  void below(const Vec3& query, double bound, std::vector<Neighbor>& out) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
 }  // namespace springscan::analysis

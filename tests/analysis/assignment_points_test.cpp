@@ -75,22 +75,27 @@ TEST(PointMatching, MoreModelThanScanIsTransposed) {
 }
 
 TEST(PointMatching, SparseAgreesWithDense) {
-  const auto model = random_points(700, 5);
-  const auto scan = random_points(760, 6);
-  const auto dense = match_points(model, scan, {.dense_limit = 10'000});
-  ASSERT_TRUE(dense.ok());
-  EXPECT_TRUE(dense->used_dense);
-  for (const int k : {1, 3, 10}) {
-    const auto sparse = match_points(model, scan, {.candidate_neighbors = k, .dense_limit = 100});
-    ASSERT_TRUE(sparse.ok());
-    EXPECT_FALSE(sparse->used_dense) << "k = " << k;
-    // With one candidate per point the first solve is optimal only on that graph; pricing
-    // has to bring in the missing pairs.
-    if (k == 1) {
-      EXPECT_GT(sparse->pricing_rounds + sparse->widening_rounds, 0);
+  // Square (the auction warm start runs) and rectangular (it does not).
+  for (const std::size_t n_scan : {400u, 430u}) {
+    const auto model = random_points(400, 5);
+    const auto scan = random_points(n_scan, 6);
+    const auto dense = match_points(model, scan, {.dense_limit = 10'000});
+    ASSERT_TRUE(dense.ok());
+    EXPECT_TRUE(dense->used_dense);
+    for (const int k : {1, 3, 10, 24}) {
+      const auto sparse =
+          match_points(model, scan, {.candidate_neighbors = k, .dense_limit = 100});
+      ASSERT_TRUE(sparse.ok());
+      EXPECT_FALSE(sparse->used_dense) << "k = " << k;
+      // With one candidate per point the first solve is optimal only on that graph; pricing
+      // or widening has to bring in the missing pairs.
+      if (k == 1) {
+        EXPECT_GT(sparse->pricing_rounds + sparse->widening_rounds, 0);
+      }
+      EXPECT_NEAR(sparse->total_cost, dense->total_cost, 1e-9 * dense->total_cost)
+          << "k = " << k << ", scan " << n_scan;
+      expect_consistent(*sparse, model, scan);
     }
-    EXPECT_NEAR(sparse->total_cost, dense->total_cost, 1e-9 * dense->total_cost) << "k = " << k;
-    expect_consistent(*sparse, model, scan);
   }
 }
 
