@@ -5,14 +5,18 @@
 #include <cmath>
 #include <sstream>
 
+#include "analysis/compensation.hpp"
+#include "analysis/deformation_field.hpp"
 #include "analysis/deviation.hpp"
 #include "analysis/fit_proto.hpp"
 #include "analysis/global_fit.hpp"
 #include "analysis/kdtree.hpp"
+#include "analysis/matching_proto.hpp"
 #include "analysis/parallel.hpp"
 #include "analysis/reduction.hpp"
 #include "analysis/settings_proto.hpp"
 #include "analysis/springback_proto.hpp"
+#include "analysis/verdict.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -30,6 +34,9 @@ struct PipelineSettings {
   GlobalFitSettings global_fit;
   DeviationSettings deviation;
   SpringbackSettings springback;
+  DeformationFieldSettings field;
+  CompensationSettings compensation;
+  VerdictSettings verdict;
   int threads = 0;
 };
 
@@ -41,12 +48,18 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto fit = from_proto(m.registration());
   auto deviation = from_proto(m.deviation());
   auto springback = from_proto(m.local_fit());
+  auto field = from_proto(m.matching());
+  auto compensation = from_proto(m.compensation());
+  auto verdict = from_proto(m.verdict());
   for (const std::string* error : {threads ? nullptr : &threads.message(),
                                    normals ? nullptr : &normals.message(),
                                    reduction ? nullptr : &reduction.message(),
                                    fit ? nullptr : &fit.message(),
                                    deviation ? nullptr : &deviation.message(),
-                                   springback ? nullptr : &springback.message()})
+                                   springback ? nullptr : &springback.message(),
+                                   field ? nullptr : &field.message(),
+                                   compensation ? nullptr : &compensation.message(),
+                                   verdict ? nullptr : &verdict.message()})
     if (error) return fail(*error);
   s.threads = *threads;
   s.normals = *normals;
@@ -54,6 +67,11 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   s.global_fit = *fit;
   s.deviation = *deviation;
   s.springback = *springback;
+  s.field = *field;
+  s.compensation = *compensation;
+  s.verdict = *verdict;
+  // Without its own tolerance the verdict judges against the deviation stage's (--tolerance).
+  if (!m.verdict().has_tolerance_mm()) s.verdict.tolerance_mm = s.deviation.tolerance_mm;
   // The per-bend pass uses the verdict's angle tolerance (--angle-tolerance, settings file).
   if (m.verdict().has_angle_tolerance_deg()) {
     if (!(m.verdict().angle_tolerance_deg() > 0.0))
@@ -76,6 +94,9 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   to_proto(s.global_fit, out->mutable_registration());
   to_proto(s.deviation, out->mutable_deviation());
   to_proto(s.springback, out->mutable_local_fit());
+  to_proto(s.field, out->mutable_matching());
+  to_proto(s.compensation, out->mutable_compensation());
+  to_proto(s.verdict, out->mutable_verdict());
   out->set_threads(s.threads);
 }
 
@@ -132,6 +153,33 @@ void add_bend_table(const PartModel& model, const PointCloud& scan_in_cad,
     if (!bend.measured) report.add_warnings(bend.status);
 }
 
+// Stages 8-9: the deformation field between the k-center-reduced model and scan (paper §5,
+// exact matching with its certificate) and the compensation vectors at the k-center model
+// points (docs/matching.md).
+std::optional<Error> add_deformation(const ReductionOutcome& reduced, const Transform& T_cad_scan,
+                                     const PipelineSettings& s, v1::InspectionReport& report) {
+  std::vector<Vec3> scan_centers;
+  scan_centers.reserve(reduced.scan_centers.size());
+  for (const Vec3& p : reduced.scan_centers) scan_centers.push_back(T_cad_scan * p);
+  auto field = deformation_field(reduced.model_centers, scan_centers, s.field);
+  if (!field) return fail(field.message());
+  to_proto(*field, report.mutable_deformation_field());
+  if (s.field.method == CorrespondenceMethod::kMinCostMatching && !field->optimality_certified)
+    report.add_warnings("deformation field: the matching's optimality certificate failed: " +
+                        field->matching.certificate.failure);
+  auto comp = compensation(*field, reduced.model_centers, s.compensation);
+  if (!comp) return fail(comp.message());
+  append_to_report(*comp, &report);
+  if (comp->unsupported > 0)
+    report.add_warnings("compensation: " + std::to_string(comp->unsupported) +
+                        " model control points have no deformation vector nearby");
+  if (comp->clipped > 0)
+    report.add_warnings("compensation: " + std::to_string(comp->clipped) +
+                        " vectors clipped to " + std::to_string(s.compensation.max_magnitude_mm) +
+                        " mm");
+  return std::nullopt;
+}
+
 }  // namespace
 
 Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
@@ -181,7 +229,13 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   add_bend_table(model, out.deviation_cloud, config->springback, report);
   timings.set_local_fits(ms_since(t));
 
-  // 8-9. Deformation field, compensation, verdict: added here.
+  t = Clock::now();
+  // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
+  if (auto error = add_deformation(*reduced, fit->T_cad_scan, *config, report)) return *error;
+  timings.set_deformation(ms_since(t));
+
+  // 9. Verdict: deviation and springback against the tolerances, analysis health.
+  *report.mutable_verdict() = decide_verdict(report, config->verdict);
 
   timings.set_total(ms_since(start));
   return out;
