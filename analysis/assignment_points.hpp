@@ -18,7 +18,7 @@
 namespace springscan::analysis {
 
 struct PointMatchingSettings {
-  int candidate_neighbors = 24;        ///< k of the k-nearest candidate graph (sparse solver)
+  int candidate_neighbors = 32;        ///< k of the k-nearest candidate graph (sparse solver)
   int dense_limit = 1000;              ///< larger sets (max of both sizes) use the sparse solver
   int max_widening_rounds = 4;         ///< k doubles per round while no perfect matching exists
   int max_pricing_rounds = 8;          ///< rounds adding certificate-violating pairs to the graph

@@ -16,6 +16,7 @@
 #include <string>
 
 #include "analysis/assignment_points.hpp"
+#include "analysis/kcenter.hpp"
 #include "analysis/sheet_profile.hpp"
 #include "tests/analysis/profile_sampling.hpp"
 
@@ -31,20 +32,14 @@ std::vector<Vec3> random_points(std::size_t n, std::uint32_t seed) {
   return points;
 }
 
-// Greedy farthest-point k-center (paper section 2), O(n k): enough for benchmark set-up.
-std::vector<Vec3> farthest_points(const std::vector<Vec3>& points, std::size_t k) {
-  std::vector<double> d2(points.size(), std::numeric_limits<double>::infinity());
+// The pipeline's k-center reduction (paper section 2) to exactly n centers.
+std::vector<Vec3> kcenter(const std::vector<Vec3>& points, std::size_t n) {
+  KCenterSettings settings;
+  settings.center_count = n;
+  const auto reduced = kcenter_reduce(points, settings);
   std::vector<Vec3> centers;
-  std::size_t next = 0;
-  while (centers.size() < std::min(k, points.size())) {
-    centers.push_back(points[next]);
-    std::size_t far = 0;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      d2[i] = std::min(d2[i], (points[i] - centers.back()).squaredNorm());
-      if (d2[i] > d2[far]) far = i;
-    }
-    next = far;
-  }
+  if (!reduced) return centers;
+  for (const auto i : reduced->centers) centers.push_back(points[i]);
   return centers;
 }
 
@@ -66,7 +61,7 @@ Instance surface_instance(std::size_t n) {
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.05);
   for (auto& p : scan) p += Vec3(noise(rng), noise(rng), noise(rng));
-  return {"surface_" + std::to_string(n), farthest_points(model, n), farthest_points(scan, n)};
+  return {"surface_" + std::to_string(n), kcenter(model, n), kcenter(scan, n)};
 }
 
 Instance random_instance(std::size_t n) {

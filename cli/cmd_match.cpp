@@ -53,7 +53,7 @@ int match_main(int argc, char** argv) {
   args.add_option("scan", "FILE", "scan points, same frame as the model");
   args.add_option("out", "FILE", "the pairs as CSV");
   args.add_option("method", "NAME", "matching (default) or nearest");
-  args.add_option("neighbors", "K", "candidate neighbours of the sparse solver (default 24)");
+  args.add_option("neighbors", "K", "candidate neighbours of the sparse solver (default 32)");
   Logger log;
   switch (args.parse(argc, argv, 2)) {
     case ArgParser::Outcome::kHelpShown: return kExitOk;
