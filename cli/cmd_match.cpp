@@ -1,11 +1,15 @@
 // springscan match: the correspondences of paper section 5 on their own, so the matching can
 // be used and checked outside the pipeline. Output: one CSV line per pair.
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "analysis/deformation_field.hpp"
 #include "analysis/file_io.hpp"
+#include "analysis/kcenter.hpp"
 #include "analysis/point_io.hpp"
 #include "cli/cli_common.hpp"
 
@@ -14,13 +18,39 @@ namespace {
 
 constexpr const char* kName = "match";
 
-std::string format_pairs(const analysis::DeformationField& field) {
+// The k-center reduction of the paper (section 2) with radius w, or all points when w = 0.
+// `original` maps each kept point back to its index in the file.
+analysis::Expected<std::vector<analysis::Vec3>> reduce(const std::vector<analysis::Vec3>& points,
+                                                       double w,
+                                                       std::vector<std::uint32_t>& original) {
+  original.clear();
+  if (w <= 0.0) {
+    for (std::uint32_t i = 0; i < points.size(); ++i) original.push_back(i);
+    return points;
+  }
+  analysis::KCenterSettings settings;
+  settings.radius_mm = w;
+  auto reduced = analysis::kcenter_reduce(points, settings);
+  if (!reduced) return analysis::fail(reduced.message());
+  std::vector<analysis::Vec3> kept;
+  kept.reserve(reduced->centers.size());
+  for (const auto i : reduced->centers) {
+    kept.push_back(points[i]);
+    original.push_back(i);
+  }
+  return kept;
+}
+
+// Pair indices refer to the files' points, also after the reduction.
+std::string format_pairs(const analysis::DeformationField& field,
+                         const std::vector<std::uint32_t>& model_index,
+                         const std::vector<std::uint32_t>& scan_index) {
   std::string out = "model_index,scan_index,squared_distance_mm2\n";
   out.reserve(out.size() + field.vectors.size() * 32);
   char line[96];
   for (const auto& v : field.vectors) {
-    std::snprintf(line, sizeof line, "%u,%u,%.17g\n", v.model_index, v.scan_index,
-                  v.squared_distance_mm2);
+    std::snprintf(line, sizeof line, "%u,%u,%.17g\n", model_index[v.model_index],
+                  scan_index[v.scan_index], v.squared_distance_mm2);
     out += line;
   }
   return out;
@@ -54,6 +84,9 @@ int match_main(int argc, char** argv) {
   args.add_option("out", "FILE", "the pairs as CSV");
   args.add_option("method", "NAME", "matching (default) or nearest");
   args.add_option("neighbors", "K", "candidate neighbours of the sparse solver (default 32)");
+  args.add_option("reduce-radius", "MM",
+                  "k-center reduction of both clouds with radius w first (paper: 10 mm); "
+                  "indices still refer to the files");
   Logger log;
   switch (args.parse(argc, argv, 2)) {
     case ArgParser::Outcome::kHelpShown: return kExitOk;
@@ -81,17 +114,33 @@ int match_main(int argc, char** argv) {
     }
     settings.matching.candidate_neighbors = static_cast<int>(*k);
   }
+  double w = 0.0;
+  if (args.has("reduce-radius")) {
+    const auto radius = args.get_number("reduce-radius");
+    if (!radius || !(*radius > 0.0) || !std::isfinite(*radius)) {
+      return fail_with(kName, "--reduce-radius " + args.get("reduce-radius") +
+                                  ": expected a radius > 0 in mm", kExitUsage);
+    }
+    w = *radius;
+  }
   const auto model = analysis::read_point_cloud(args.get("model"));
   if (!model) return fail_with(kName, model.message(), kExitUsage);
   const auto scan = analysis::read_point_cloud(args.get("scan"));
   if (!scan) return fail_with(kName, scan.message(), kExitUsage);
 
   const auto start = std::chrono::steady_clock::now();
-  const auto field = analysis::deformation_field(model->points, scan->points, settings);
+  std::vector<std::uint32_t> model_index, scan_index;
+  const auto model_points = reduce(model->points, w, model_index);
+  if (!model_points) return fail_with(kName, args.get("model") + ": " + model_points.message(),
+                                      kExitAnalysisFailed);
+  const auto scan_points = reduce(scan->points, w, scan_index);
+  if (!scan_points) return fail_with(kName, args.get("scan") + ": " + scan_points.message(),
+                                     kExitAnalysisFailed);
+  const auto field = analysis::deformation_field(*model_points, *scan_points, settings);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!field) return fail_with(kName, field.message(), kExitAnalysisFailed);
-  if (const auto written = analysis::write_file_atomically(args.get("out"), format_pairs(*field));
+  if (const auto written = analysis::write_file_atomically(args.get("out"), format_pairs(*field, model_index, scan_index));
       !written) {
     return fail_with(kName, written.message(), kExitAnalysisFailed);
   }
