@@ -12,6 +12,7 @@ namespace springscan::cli {
 int version_main(int argc, char** argv);
 int match_main(int argc, char** argv);
 int report_main(int argc, char** argv);
+int scan_main(int argc, char** argv);
 
 namespace {
 
@@ -19,6 +20,7 @@ const Command kCommands[] = {
     {"version", "print the version", version_main},
     {"match", "pair model and scan points by exact min-cost matching", match_main},
     {"report", "render the HTML report again from a saved report.pb", report_main},
+    {"scan", "acquire one scan from the configured USB scanner", scan_main},
 };
 
 void print_usage() {

@@ -1,0 +1,95 @@
+#include "drivers/scanner_proto.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace springscan::drivers {
+namespace {
+
+using analysis::fail;
+
+// VID/PID/serial/timeout shared by both kinds; `product_id` is the kind's default PID.
+analysis::Expected<LinkSettings> link_from_proto(const v1::ScannerConfig& c,
+                                                 std::uint16_t product_id) {
+  LinkSettings link;
+  link.usb.product_id = product_id;
+  if (c.has_vendor_id()) {
+    if (c.vendor_id() == 0 || c.vendor_id() > 0xFFFF)
+      return fail("scanner.vendor_id = " + std::to_string(c.vendor_id()) + " (1..65535)");
+    link.usb.vendor_id = static_cast<std::uint16_t>(c.vendor_id());
+  }
+  if (c.has_product_id()) {
+    if (c.product_id() == 0 || c.product_id() > 0xFFFF)
+      return fail("scanner.product_id = " + std::to_string(c.product_id()) + " (1..65535)");
+    link.usb.product_id = static_cast<std::uint16_t>(c.product_id());
+  }
+  if (c.has_serial()) link.usb.serial = c.serial();
+  if (c.has_timeout_s()) {
+    if (!(c.timeout_s() > 0.0 && c.timeout_s() <= 3600.0))
+      return fail("scanner.timeout_s = " + std::to_string(c.timeout_s()) + " (0 < s <= 3600)");
+    link.data_timeout_ms = static_cast<int>(std::lround(c.timeout_s() * 1000.0));
+  }
+  return link;
+}
+
+analysis::Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+analysis::Expected<LaserScannerSettings> laser_settings_from_proto(const v1::ScannerConfig& c) {
+  auto link = link_from_proto(c, protocol::kProductIdLaser);
+  if (!link) return link.error();
+  LaserScannerSettings s;
+  s.link = *link;
+  if (c.has_laser_calibration()) {
+    const auto& k = c.laser_calibration();
+    if (k.has_origin_mm()) s.calibration.origin_mm = vec(k.origin_mm());
+    if (k.has_x_axis()) s.calibration.x_axis = vec(k.x_axis());
+    if (k.has_z_axis()) s.calibration.z_axis = vec(k.z_axis());
+    if (k.has_motion_axis()) s.calibration.motion_axis = vec(k.motion_axis());
+  }
+  if (const std::string bad = validate(s.calibration); !bad.empty())
+    return fail("scanner.laser_calibration: " + bad);
+  return s;
+}
+
+analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(
+    const v1::ScannerConfig& c) {
+  auto link = link_from_proto(c, protocol::kProductIdTactile);
+  if (!link) return link.error();
+  TactileScannerSettings s;
+  s.link = *link;
+  if (c.t_part_machine_size() != 0) {
+    if (c.t_part_machine_size() != 16)
+      return fail("scanner.t_part_machine has " + std::to_string(c.t_part_machine_size()) +
+                  " numbers, expected 16 (row-major 4x4)");
+    analysis::Transform::MatrixType m;
+    for (int i = 0; i < 16; ++i) m(i / 4, i % 4) = c.t_part_machine(i);
+    const analysis::Mat3 R = m.topLeftCorner<3, 3>();
+    if (!m.allFinite() || !(R.transpose() * R).isApprox(analysis::Mat3::Identity(), 1e-6) ||
+        R.determinant() < 0.0 || !m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1)))
+      return fail("scanner.t_part_machine is not a rigid transform");
+    s.calibration.T_part_machine.matrix() = m;
+  }
+  return s;
+}
+
+analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfig& c) {
+  switch (c.kind()) {
+    case v1::ScannerConfig::LASER_LINE: {
+      auto s = laser_settings_from_proto(c);
+      if (!s) return s.error();
+      return std::unique_ptr<Scanner>(std::make_unique<LaserLineScanner>(*s));
+    }
+    case v1::ScannerConfig::TACTILE_PROBE: {
+      auto s = tactile_settings_from_proto(c);
+      if (!s) return s.error();
+      return std::unique_ptr<Scanner>(std::make_unique<TactileProbeScanner>(*s));
+    }
+    default:
+      return fail("scanner.kind = " + v1::ScannerConfig::Kind_Name(c.kind()) +
+                  " (LASER_LINE or TACTILE_PROBE)");
+  }
+}
+
+}  // namespace springscan::drivers

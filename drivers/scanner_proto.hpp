@@ -1,0 +1,25 @@
+#pragma once
+// The scanner named by the daemon config (proto ScannerConfig) as a drivers::Scanner: the one
+// place that converts that message into driver settings (STYLE.md §1: only *_proto.cpp files
+// convert). Settings start from the C++ defaults and take only the fields the message sets.
+
+#include <memory>
+
+#include "analysis/expected.hpp"
+#include "drivers/laser_scanner.hpp"
+#include "drivers/tactile_scanner.hpp"
+#include "proto/springscan.pb.h"
+
+namespace springscan::drivers {
+
+/// Laser settings from the config. Errors name the field and the value.
+analysis::Expected<LaserScannerSettings> laser_settings_from_proto(const v1::ScannerConfig& config);
+/// Tactile settings from the config. Errors name the field and the value.
+analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(
+    const v1::ScannerConfig& config);
+
+/// The driver for `config.kind` (LASER_LINE or TACTILE_PROBE), not yet opened: it opens the
+/// device on first use and again after an unplug.
+analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfig& config);
+
+}  // namespace springscan::drivers
