@@ -41,15 +41,20 @@ std::size_t append_probe_batch(const ProbeBatchView& batch, const ProbeCalibrati
                                std::vector<analysis::Vec3>& out,
                                std::vector<analysis::Vec3>* normals) {
   const analysis::Mat3 R = c.T_part_machine.linear();
-  for (std::size_t i = 0; i < batch.count; ++i) {
-    const ProbeRecord r = probe_record(batch, i);
-    const analysis::Vec3 centre(r.center_mm[0], r.center_mm[1], r.center_mm[2]);
-    const analysis::Vec3 dir =
-        analysis::Vec3(r.direction[0], r.direction[1], r.direction[2]).normalized();
+  const analysis::Vec3 t = c.T_part_machine.translation();
+  const std::size_t start = out.size();
+  out.resize(start + batch.count);
+  if (normals != nullptr) normals->resize(start + batch.count);
+  const std::uint8_t* q = batch.records.data();
+  for (std::size_t i = 0; i < batch.count; ++i, q += protocol::kProbeRecordBytes) {
+    // §4.2 record layout: centre 3 x f64, direction 3 x f32, radius f32.
+    const analysis::Vec3 centre(wire::load_f64(q), wire::load_f64(q + 8), wire::load_f64(q + 16));
+    analysis::Vec3 dir(wire::load_f32(q + 24), wire::load_f32(q + 28), wire::load_f32(q + 32));
+    dir /= dir.norm();  // unit on the wire up to float rounding
     // §4.2 stylus radius compensation: the stylus touched the surface one radius further along
     // the direction it was moving.
-    out.push_back(c.T_part_machine * (centre + double(r.stylus_radius_mm) * dir));
-    if (normals != nullptr) normals->push_back(-(R * dir));
+    out[start + i] = R * (centre + double(wire::load_f32(q + 36)) * dir) + t;
+    if (normals != nullptr) (*normals)[start + i] = -(R * dir);
   }
   return batch.count;
 }
