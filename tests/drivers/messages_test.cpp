@@ -100,7 +100,8 @@ TEST(Messages, ProbeBatchRoundTrips) {
   std::vector<ProbeRecord> recs(2);
   recs[0] = {{1.5, -2.25, 30.125}, {0.0f, 0.0f, -1.0f}, 1.5f};
   recs[1] = {{4.0, 5.0, 6.0}, {0.6f, 0.0f, -0.8f}, 0.5f};
-  const auto v = decode_probe_batch(encode_probe_batch(40, 123, recs));
+  const Bytes payload = encode_probe_batch(40, 123, recs);  // the view points into it
+  const auto v = decode_probe_batch(payload);
   ASSERT_TRUE(v.ok()) << v.message();
   EXPECT_EQ(v->first_index, 40u);
   ASSERT_EQ(v->count, 2);
