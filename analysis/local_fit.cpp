@@ -165,6 +165,8 @@ Expected<LocalFitResult> local_fit(const LocalFitTarget& target, const PointClou
     if (i >= scan.size())
       return fail("local_fit: index " + std::to_string(i) + " outside the scan of " +
                   std::to_string(scan.size()) + " points");
+    if (!scan.points[i].allFinite())
+      return fail("local_fit: point " + std::to_string(i) + " is not finite");
     f.source.push_back(scan.points[i]);
   }
   // Rotations act about the subset's centroid, scaled by its rms radius (mm vs radians).

@@ -80,12 +80,16 @@ std::uint64_t morton_key(const Vec3& p, const Vec3& origin) {
 // Every `stride`-th scan point, in Z-order: neighbouring queries then walk the same part of
 // the k-d tree, which halves their cost on a randomly ordered scan.
 std::vector<std::uint32_t> thinned_in_space_order(const PointCloud& scan, std::size_t stride) {
+  // Non-finite points (NaN, inf) are left out here: they belong to no flange.
+  const auto finite = [&scan](std::size_t i) { return scan.points[i].allFinite(); };
   Vec3 origin = Vec3::Constant(std::numeric_limits<double>::infinity());
-  for (std::size_t i = 0; i < scan.size(); i += stride) origin = origin.cwiseMin(scan.points[i]);
+  for (std::size_t i = 0; i < scan.size(); i += stride)
+    if (finite(i)) origin = origin.cwiseMin(scan.points[i]);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
   keyed.reserve(scan.size() / stride + 1);
   for (std::size_t i = 0; i < scan.size(); i += stride)
-    keyed.emplace_back(morton_key(scan.points[i], origin), static_cast<std::uint32_t>(i));
+    if (finite(i))
+      keyed.emplace_back(morton_key(scan.points[i], origin), static_cast<std::uint32_t>(i));
   std::sort(keyed.begin(), keyed.end());
   std::vector<std::uint32_t> order;
   order.reserve(keyed.size());

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <numbers>
 
 #include "analysis/relative_rotation.hpp"
@@ -131,6 +132,13 @@ TEST(LocalFit, SubsetsByFaceAndErrorsOnBadInput) {
   const auto out_of_range = local_fit(target, scan, bad);
   ASSERT_FALSE(out_of_range.ok());
   EXPECT_NE(out_of_range.message().find("index 5000"), std::string::npos);
+  PointCloud with_nan = scan;
+  with_nan.points[3].x() = std::nan("");
+  std::vector<std::uint32_t> first(200);
+  for (std::uint32_t i = 0; i < first.size(); ++i) first[i] = i;
+  const auto not_finite = local_fit(target, with_nan, first);
+  ASSERT_FALSE(not_finite.ok());
+  EXPECT_NE(not_finite.message().find("point 3"), std::string::npos);
   const PointCloud far_away = transformed(scan, Transform(Eigen::Translation3d(0, 0, 500)));
   std::vector<std::uint32_t> all(far_away.size());
   for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;

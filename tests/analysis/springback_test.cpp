@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 
@@ -204,6 +205,13 @@ TEST(Springback, FlangesWithTooFewPointsLeaveTheirBendsUnmeasured) {
   const auto empty = measure_springback(*model, PointCloud{});
   ASSERT_TRUE(empty.ok());
   for (const auto& bend : empty->bends) EXPECT_FALSE(bend.measured);
+  // Non-finite points belong to no flange; the rest is measured as before.
+  PointCloud with_nan = partial;
+  with_nan.points[5] = Vec3(std::nan(""), 0, 0);
+  with_nan.points[9] = Vec3(0, std::numeric_limits<double>::infinity(), 0);
+  const auto nan_result = measure_springback(*model, with_nan);
+  ASSERT_TRUE(nan_result.ok());
+  EXPECT_NEAR(nan_result->bends[0].springback_deg, result->bends[0].springback_deg, 1e-3);
   // A model without face ids is an error, not a crash.
   PartModel bare = *model;
   bare.samples.face_ids.clear();
