@@ -177,11 +177,63 @@ void warm_start(const CandidateGraph& g, Assignment& a) {
   }
 }
 
+// Near-square rectangular graphs: n - m dummy rows of cost 0 to every column make the problem
+// square, so the auction warm start applies. In the square optimum every dummy column has the
+// largest v (a dummy's u_d + v_j <= 0 is tight on its own column), so shifting v by that
+// maximum V (and u by +V) gives v <= 0 and v = 0 on the columns the real rows leave unused:
+// the rectangular certificate (docs/matching.md).
+CandidateGraph with_dummy_rows(const CandidateGraph& g) {
+  CandidateGraph square = g;
+  for (std::size_t d = g.rows; d < g.cols; ++d) {
+    for (std::size_t j = 0; j < g.cols; ++j) {
+      square.col_index.push_back(static_cast<std::int32_t>(j));
+      square.costs.push_back(0.0);
+    }
+    square.row_offsets.push_back(square.col_index.size());
+  }
+  square.rows = g.cols;
+  return square;
+}
+
+Assignment drop_dummy_rows(const CandidateGraph& g, Assignment square) {
+  double shift = -kInf;
+  for (std::size_t j = 0; j < g.cols; ++j) {
+    if (to_index(square.col_to_row[j]) >= g.rows) shift = std::max(shift, square.v[j]);
+  }
+  Assignment a;
+  a.row_to_col.assign(square.row_to_col.begin(),
+                      square.row_to_col.begin() + static_cast<std::ptrdiff_t>(g.rows));
+  a.col_to_row = std::move(square.col_to_row);
+  for (auto& r : a.col_to_row) {
+    if (r >= 0 && to_index(r) >= g.rows) r = -1;
+  }
+  a.u.assign(square.u.begin(), square.u.begin() + static_cast<std::ptrdiff_t>(g.rows));
+  a.v = std::move(square.v);
+  for (double& x : a.u) x += shift;
+  for (double& x : a.v) x -= shift;
+  a.total_cost = square.total_cost;  // dummy edges cost 0
+  a.augmentations = square.augmentations;
+  return a;
+}
+
 }  // namespace
 
 Expected<Assignment> solve_sparse(const CandidateGraph& graph) {
   if (const std::string problem = validate(graph); !problem.empty()) {
     return fail("sparse assignment: " + problem);
+  }
+  // Feasibility first (Hopcroft-Karp): the auction would otherwise bid until its budget ends.
+  if (const std::size_t matched = maximum_matching_size(graph); matched < graph.rows) {
+    return fail("sparse assignment: no row-saturating matching in the candidate graph (a maximum "
+                "matching places " + std::to_string(matched) + " of " +
+                std::to_string(graph.rows) + " rows)");
+  }
+  // Dummy rows cost (n - m) n edges: only when that does not outgrow the graph itself.
+  if (graph.rows > 0 && graph.rows < graph.cols &&
+      (graph.cols - graph.rows) * graph.cols <= graph.edge_count()) {
+    auto square = solve_sparse(with_dummy_rows(graph));
+    if (!square.ok()) return square;
+    return drop_dummy_rows(graph, std::move(square).value());
   }
   Assignment a;
   a.row_to_col.assign(graph.rows, -1);

@@ -75,8 +75,8 @@ TEST(PointMatching, MoreModelThanScanIsTransposed) {
 }
 
 TEST(PointMatching, SparseAgreesWithDense) {
-  // Square (the auction warm start runs) and rectangular (it does not).
-  for (const std::size_t n_scan : {400u, 430u}) {
+  // Square (auction warm start), near-square (dummy rows, auction) and rectangular.
+  for (const std::size_t n_scan : {400u, 405u, 430u}) {
     const auto model = random_points(400, 5);
     const auto scan = random_points(n_scan, 6);
     const auto dense = match_points(model, scan, {.dense_limit = 10'000});
