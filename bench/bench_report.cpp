@@ -56,7 +56,8 @@ void BM_EncodePng(benchmark::State& state) {
   const auto image = render_points(cloud.points, cloud.deviation_colors,
                                    fit_view(cloud.points, ViewKind::kIsometric), {2});
   for (auto _ : state)
-    state.counters["png_kB"] = static_cast<double>(encode_png(image, {static_cast<int>(state.range(0))})->size()) / 1e3;
+    state.counters["png_kB"] =
+        static_cast<double>(encode_png(image, {static_cast<int>(state.range(0))})->size()) / 1e3;
 }
 BENCHMARK(BM_EncodePng)->Arg(1)->Arg(3)->Arg(6)->Unit(benchmark::kMillisecond);
 

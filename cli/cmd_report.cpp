@@ -21,8 +21,8 @@ analysis::Expected<v1::InspectionReport> load_report(const fs::path& path) {
   if (path.extension() == ".json") {
     const auto status = google::protobuf::util::JsonStringToMessage(*bytes, &report);
     if (!status.ok())
-      return analysis::fail(path.string() + ": not an InspectionReport in JSON: " +
-                            std::string(status.message()));
+      return analysis::fail(path.string() +
+                            ": not an InspectionReport in JSON: " + std::string(status.message()));
   } else if (!report.ParseFromString(*bytes)) {
     return analysis::fail(path.string() + ": not a binary InspectionReport (" +
                           std::to_string(bytes->size()) + " bytes)");
@@ -39,8 +39,8 @@ analysis::Expected<analysis::PointCloud> load_cloud(const ArgParser& args,
   if (args.has("cloud")) return analysis::read_point_cloud(args.get("cloud"));
   const fs::path beside = report_path.parent_path() / "deviation.ply";
   if (!fs::exists(beside)) {
-    settings.missing_cloud_note = "deviation.ply was not found beside " +
-                                  report_path.filename().string();
+    settings.missing_cloud_note =
+        "deviation.ply was not found beside " + report_path.filename().string();
     logger.warning(settings.missing_cloud_note + ": rendering without the pictures");
     return analysis::PointCloud{};
   }
@@ -64,9 +64,12 @@ int report_main(int argc, char** argv) {
   args.add_option("cloud", "FILE", "the deviation cloud (default: deviation.ply beside REPORT)");
   Logger logger;
   switch (args.parse(argc, argv, 2)) {
-    case ArgParser::Outcome::kHelpShown: return kExitOk;
-    case ArgParser::Outcome::kUsageError: return fail_with("report", args.error(), kExitUsage);
-    case ArgParser::Outcome::kRun: break;
+    case ArgParser::Outcome::kHelpShown:
+      return kExitOk;
+    case ArgParser::Outcome::kUsageError:
+      return fail_with("report", args.error(), kExitUsage);
+    case ArgParser::Outcome::kRun:
+      break;
   }
   if (!args.configure_logger(logger)) return fail_with("report", args.error(), kExitUsage);
   if (args.positionals().size() != 1)

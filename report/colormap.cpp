@@ -9,8 +9,8 @@ namespace springscan::report {
 namespace {
 
 // Stops at t = -1, -0.5, 0, 0.5, 1 of the scale: blue, cyan, green, yellow, red.
-constexpr std::array<Rgb, 5> kStops = {{
-    {32, 64, 208}, {0, 176, 232}, {40, 184, 72}, {248, 200, 0}, {216, 36, 36}}};
+constexpr std::array<Rgb, 5> kStops = {
+    {{32, 64, 208}, {0, 176, 232}, {40, 184, 72}, {248, 200, 0}, {216, 36, 36}}};
 
 }  // namespace
 

@@ -69,8 +69,8 @@ analysis::Expected<std::string> compensation_figure_html(const v1::InspectionRep
             << svg_number(from.y()) << "' x2='" << svg_number(to.x()) << "' y2='"
             << svg_number(to.y()) << "' marker-end='url(#arrowhead)'/>";
   }
-  auto svg = view_svg(cloud.points, cloud.grey_colors, cloud.spacing_mm, view, settings, overlay.str(),
-                                    "compensation vectors as arrows");
+  auto svg = view_svg(cloud.points, cloud.grey_colors, cloud.spacing_mm, view, settings,
+                      overlay.str(), "compensation vectors as arrows");
   if (!svg) return svg.error();
   std::string caption = std::string("Compensation vectors, ") + view_name(kind) +
                         " view; arrows drawn " + fixed(gain, gain < 10 ? 1 : 0) +

@@ -32,11 +32,11 @@ std::string axis_triad(const ViewProjection& view) {
     Eigen::Vector2d d = view.direction_to_pixel(Vec3::Unit(a)) / view.scale_px_per_mm;
     const Eigen::Vector2d tip = origin + 18.0 * d;
     const Eigen::Vector2d label = origin + (d.norm() < 0.2 ? Eigen::Vector2d(6, -6) : 25.0 * d);
-    svg << "<line x1='" << svg_number(origin.x()) << "' y1='" << svg_number(origin.y())
-        << "' x2='" << svg_number(tip.x()) << "' y2='" << svg_number(tip.y()) << "' stroke='"
-        << colors[a] << "' stroke-width='2'/><text x='" << svg_number(label.x() - 3)
-        << "' y='" << svg_number(label.y() + 4) << "' fill='" << colors[a]
-        << "' class='triad'>" << names[a] << "</text>";
+    svg << "<line x1='" << svg_number(origin.x()) << "' y1='" << svg_number(origin.y()) << "' x2='"
+        << svg_number(tip.x()) << "' y2='" << svg_number(tip.y()) << "' stroke='" << colors[a]
+        << "' stroke-width='2'/><text x='" << svg_number(label.x() - 3) << "' y='"
+        << svg_number(label.y() + 4) << "' fill='" << colors[a] << "' class='triad'>" << names[a]
+        << "</text>";
   }
   return svg.str();
 }
@@ -65,32 +65,34 @@ double surface_spacing_mm(const std::vector<Vec3>& points) {
     keys.push_back((static_cast<std::uint64_t>(c.x()) << 42) |
                    (static_cast<std::uint64_t>(c.y()) << 21) | static_cast<std::uint64_t>(c.z()));
   }
+  if (keys.empty()) return 0.0;
   std::sort(keys.begin(), keys.end());
   const auto occupied = static_cast<double>(std::unique(keys.begin(), keys.end()) - keys.begin());
   return std::sqrt(occupied * voxel * voxel / static_cast<double>(keys.size()));
 }
 
 analysis::Expected<std::string> view_svg(const std::vector<Vec3>& points,
-                                           const std::vector<Rgb>& colors, double spacing_mm,
-                                           const ViewProjection& view,
-                                           const ReportSettings& settings,
-                                           const std::string& overlay, const std::string& label) {
+                                         const std::vector<Rgb>& colors, double spacing_mm,
+                                         const ViewProjection& view, const ReportSettings& settings,
+                                         const std::string& overlay, const std::string& label) {
   int radius = settings.splat_radius_px;
   if (radius <= 0) {
     // Half the point spacing in pixels, rounded up, covers the gaps of a random sample.
     const double spacing_px = spacing_mm * view.scale_px_per_mm;
-    radius = std::clamp(static_cast<int>(std::ceil(0.75 * spacing_px)), 1, 6);
+    // Clamped as a double first: a degenerate view can make spacing_px huge or NaN.
+    const double wanted = std::isfinite(spacing_px) ? std::ceil(0.75 * spacing_px) : 1.0;
+    radius = static_cast<int>(std::clamp(wanted, 1.0, 6.0));
   }
   const RgbImage image =
       render_points(points, colors, view, {radius, {255, 255, 255}, settings.shading});
   auto png = encode_png(image, {settings.png_compression_level});
   if (!png) return png.error();
   std::ostringstream svg;
-  svg << "<svg class='view' viewBox='0 0 " << view.width_px << ' ' << view.height_px
-      << "' width='" << view.width_px << "' height='" << view.height_px
-      << "' role='img' aria-label='" << escape_html(label) << "'><image width='"
-      << view.width_px << "' height='" << view.height_px << "' href='data:image/png;base64,"
-      << base64(*png) << "'/>" << axis_triad(view) << overlay << "</svg>";
+  svg << "<svg class='view' viewBox='0 0 " << view.width_px << ' ' << view.height_px << "' width='"
+      << view.width_px << "' height='" << view.height_px << "' role='img' aria-label='"
+      << escape_html(label) << "'><image width='" << view.width_px << "' height='" << view.height_px
+      << "' href='data:image/png;base64," << base64(*png) << "'/>" << axis_triad(view) << overlay
+      << "</svg>";
   return svg.str();
 }
 
@@ -125,8 +127,8 @@ analysis::Expected<std::string> deviation_views_html(const DrawCloud& cloud,
   const auto draw = [&](std::size_t first, std::size_t stride) {
     for (std::size_t i = first; i < kCount; i += stride) {
       const ViewProjection view = fit_view(cloud.points, kKinds[i], view_settings(settings));
-      svgs[i] = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings,
-                         "", std::string("deviation, ") + view_name(kKinds[i]) + " view");
+      svgs[i] = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings, "",
+                         std::string("deviation, ") + view_name(kKinds[i]) + " view");
     }
   };
   const std::size_t workers = std::min<std::size_t>(
@@ -152,8 +154,9 @@ std::pair<Vec3, Vec3> bend_axis_extent(const v1::Bend& bend, const std::vector<V
   if (!(dir.norm() > 0) || !dir.allFinite()) dir = Vec3::UnitY();
   dir.normalize();
   Eigen::AlignedBox3d box;
-  for (const auto& p : points) box.extend(p);
-  const double size = points.empty() ? 100.0 : box.diagonal().norm();
+  for (const auto& p : points)
+    if (p.allFinite()) box.extend(p);
+  const double size = box.isEmpty() ? 100.0 : box.diagonal().norm();
   const double near = std::max(3.0 * bend.radius_mm(), 0.05 * size);
   double t_min = std::numeric_limits<double>::infinity(), t_max = -t_min;
   for (const auto& p : points) {
@@ -173,7 +176,10 @@ analysis::Expected<std::string> bends_figure_html(const v1::InspectionReport& re
   if (cloud.points.empty()) return missing_picture(settings);
   const ViewProjection view = fit_view(cloud.points, ViewKind::kIsometric, view_settings(settings));
   std::ostringstream overlay;
-  for (const auto& bend : report.bends()) {
+  // Each axis scans the drawn points once; the cap bounds the work for a hostile report.
+  const int drawn = std::min(report.bends_size(), settings.max_bend_labels);
+  for (int k = 0; k < drawn; ++k) {
+    const v1::Bend& bend = report.bends(k);
     const auto [a, b] = bend_axis_extent(bend, cloud.points);
     const Eigen::Vector2d pa = view.to_pixel(a), pb = view.to_pixel(b);
     const char* state = !bend.measured() ? "nm" : bend.pass() ? "ok" : "ng";
@@ -183,13 +189,12 @@ analysis::Expected<std::string> bends_figure_html(const v1::InspectionReport& re
     // The label sits at the axis end nearer the top of the picture, pushed outwards.
     const Eigen::Vector2d end = pa.y() < pb.y() ? pa : pb;
     const Eigen::Vector2d at = end + 12.0 * (end - 0.5 * (pa + pb)).normalized();
-    overlay << "<g class='blabel " << state << "'><circle cx='" << svg_number(at.x())
-            << "' cy='" << svg_number(at.y()) << "' r='11'/><text x='" << svg_number(at.x())
-            << "' y='" << svg_number(at.y() + 4) << "' text-anchor='middle'>B" << bend.id()
-            << "</text></g>";
+    overlay << "<g class='blabel " << state << "'><circle cx='" << svg_number(at.x()) << "' cy='"
+            << svg_number(at.y()) << "' r='11'/><text x='" << svg_number(at.x()) << "' y='"
+            << svg_number(at.y() + 4) << "' text-anchor='middle'>B" << bend.id() << "</text></g>";
   }
-  auto svg = view_svg(cloud.points, cloud.grey_colors, cloud.spacing_mm, view, settings, overlay.str(),
-                        "bends labelled on the isometric view");
+  auto svg = view_svg(cloud.points, cloud.grey_colors, cloud.spacing_mm, view, settings,
+                      overlay.str(), "bends labelled on the isometric view");
   if (!svg) return svg.error();
   return "<figure class='view'>" + *svg +
          "<figcaption>Bend axes, isometric view (green: pass, red: fail, grey: not "

@@ -40,8 +40,7 @@ DrawCloud make_draw_cloud(const analysis::PointCloud& cloud, double scale_mm,
 /// Errors: PNG encoding failed.
 analysis::Expected<std::string> view_svg(const std::vector<Vec3>& points,
                                          const std::vector<Rgb>& colors, double spacing_mm,
-                                         const ViewProjection& view,
-                                         const ReportSettings& settings,
+                                         const ViewProjection& view, const ReportSettings& settings,
                                          const std::string& overlay, const std::string& label);
 
 /// Four <figure>s (top, front, side, isometric) coloured by deviation.

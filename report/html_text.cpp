@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 namespace springscan::report {
 
@@ -10,12 +11,23 @@ std::string escape_html(std::string_view text) {
   out.reserve(text.size() + text.size() / 8);
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out.push_back(c);
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out.push_back(c);
     }
   }
   return out;
@@ -52,27 +64,31 @@ std::string fixed(double value, int decimals) {
   if (!std::isfinite(value)) return "n/a";
   char text[64];
   std::snprintf(text, sizeof text, "%.*f", decimals, value);
-  std::string out = text;
-  if (out.find_first_not_of("-0.") == std::string::npos && out[0] == '-') out.erase(0, 1);
-  return out;
+  // "-0.00" (a tiny negative value) prints as "0.00".
+  const bool negative_zero = text[0] == '-' && std::strspn(text + 1, "0.") == std::strlen(text + 1);
+  return negative_zero ? text + 1 : text;
 }
 
+// Both below work in a char buffer: string insert/assign of short literals here trips g++ 12's
+// -Wrestrict false positive under -O2 with sanitizers.
 std::string signed_fixed(double value, int decimals) {
-  std::string out = fixed(value, decimals);
-  if (out != "n/a" && out[0] != '-' && out.find_first_not_of("0.") != std::string::npos)
-    out.insert(0, 1, '+');
-  return out;
+  const std::string out = fixed(value, decimals);
+  if (out == "n/a" || out[0] == '-' || out.find_first_not_of("0.") == std::string::npos) return out;
+  char text[80];
+  std::snprintf(text, sizeof text, "+%s", out.c_str());
+  return text;
 }
 
 std::string svg_number(double value) {
-  if (!std::isfinite(value)) return "0";
-  char text[64];
-  std::snprintf(text, sizeof text, "%.2f", value);
-  std::string out = text;
-  while (!out.empty() && out.back() == '0') out.pop_back();
-  if (!out.empty() && out.back() == '.') out.pop_back();
-  if (out == "-0") out = "0";
-  return out;
+  char text[64] = "0";
+  if (std::isfinite(value)) std::snprintf(text, sizeof text, "%.2f", value);
+  std::size_t n = std::strlen(text);
+  if (std::strchr(text, '.')) {
+    while (n > 0 && text[n - 1] == '0') --n;
+    if (n > 0 && text[n - 1] == '.') --n;
+  }
+  const std::string_view trimmed(text, n);
+  return std::string(trimmed == "-0" ? std::string_view("0") : trimmed);
 }
 
 }  // namespace springscan::report

@@ -21,16 +21,14 @@ struct Panel {
 // Frame, grid lines and tick labels of a panel, then its title and axis labels.
 void draw_axes(std::ostringstream& svg, const Panel& p, const std::string& title,
                const std::string& x_label, const std::string& y_label, int y_decimals) {
-  svg << "<text x='" << svg_number(p.left) << "' y='" << svg_number(p.top - 8)
-      << "' class='ttl'>" << escape_html(title) << "</text>";
+  svg << "<text x='" << svg_number(p.left) << "' y='" << svg_number(p.top - 8) << "' class='ttl'>"
+      << escape_html(title) << "</text>";
   const double y_step = nice_step(p.y_max - p.y_min, 5);
-  for (double y = std::ceil(p.y_min / y_step) * y_step; y <= p.y_max + 1e-9 * y_step;
-       y += y_step) {
+  for (double y = std::ceil(p.y_min / y_step) * y_step; y <= p.y_max + 1e-9 * y_step; y += y_step) {
     svg << "<line x1='" << svg_number(p.left) << "' x2='" << svg_number(p.left + p.width)
         << "' y1='" << svg_number(p.py(y)) << "' y2='" << svg_number(p.py(y))
         << "' class='grid'/><text x='" << svg_number(p.left - 4) << "' y='"
-        << svg_number(p.py(y) + 3.5) << "' text-anchor='end'>" << fixed(y, y_decimals)
-        << "</text>";
+        << svg_number(p.py(y) + 3.5) << "' text-anchor='end'>" << fixed(y, y_decimals) << "</text>";
   }
   const double x_step = std::max(1.0, nice_step(p.x_max - p.x_min, 6));
   for (double x = std::ceil(p.x_min / x_step) * x_step; x <= p.x_max + 1e-9; x += x_step) {
@@ -55,19 +53,19 @@ void draw_series(std::ostringstream& svg, const Panel& p, const std::vector<doub
     svg << svg_number(p.px(first_x + static_cast<double>(i))) << ',' << svg_number(p.py(ys[i]))
         << ' ';
   svg << "'/>";
+  if (ys.size() > 200) return;  // a long history stays a line: dots would only clutter it
   for (std::size_t i = 0; i < ys.size(); ++i)
     svg << "<circle class='" << css_class << "' cx='"
-        << svg_number(p.px(first_x + static_cast<double>(i))) << "' cy='"
-        << svg_number(p.py(ys[i])) << "' r='2.5'/>";
+        << svg_number(p.px(first_x + static_cast<double>(i))) << "' cy='" << svg_number(p.py(ys[i]))
+        << "' r='2.5'/>";
 }
 
 void draw_hline(std::ostringstream& svg, const Panel& p, double y, const std::string& label) {
   if (y < p.y_min || y > p.y_max) return;
-  svg << "<line x1='" << svg_number(p.left) << "' x2='" << svg_number(p.left + p.width)
-      << "' y1='" << svg_number(p.py(y)) << "' y2='" << svg_number(p.py(y))
-      << "' class='ref'/><text x='" << svg_number(p.left + p.width - 4) << "' y='"
-      << svg_number(p.py(y) - 4) << "' text-anchor='end' class='reflabel'>"
-      << escape_html(label) << "</text>";
+  svg << "<line x1='" << svg_number(p.left) << "' x2='" << svg_number(p.left + p.width) << "' y1='"
+      << svg_number(p.py(y)) << "' y2='" << svg_number(p.py(y)) << "' class='ref'/><text x='"
+      << svg_number(p.left + p.width - 4) << "' y='" << svg_number(p.py(y) - 4)
+      << "' text-anchor='end' class='reflabel'>" << escape_html(label) << "</text>";
 }
 
 }  // namespace
@@ -85,9 +83,9 @@ std::string error_progression_svg(const std::vector<double>& history,
                                   const ErrorPlotSettings& settings) {
   const double pw = settings.panel_width_px, ph = settings.panel_height_px;
   std::ostringstream svg;
-  svg << "<svg class='chart' viewBox='0 0 "
-      << svg_number(2 * pw) << ' ' << svg_number(ph) << "' width='" << svg_number(2 * pw)
-      << "' height='" << svg_number(ph) << "' role='img' aria-label='ICP error progression'>";
+  svg << "<svg class='chart' viewBox='0 0 " << svg_number(2 * pw) << ' ' << svg_number(ph)
+      << "' width='" << svg_number(2 * pw) << "' height='" << svg_number(ph)
+      << "' role='img' aria-label='ICP error progression'>";
   std::vector<double> errors;
   for (double e : history)
     if (std::isfinite(e)) errors.push_back(e);
@@ -100,7 +98,9 @@ std::string error_progression_svg(const std::vector<double>& history,
   const double e_max = *std::max_element(errors.begin(), errors.end());
   Panel left{58, 24, pw - 76, ph - 62, 0, last, 0, e_max > 0 ? e_max * 1.05 : 1.0};
   draw_axes(svg, left, "Error E(i)", "iteration i", "E(i)  [mm\u00b2]",
-            e_max >= 100 ? 0 : e_max >= 1 ? 1 : 3);
+            e_max >= 100 ? 0
+            : e_max >= 1 ? 1
+                         : 3);
   draw_series(svg, left, errors, 0, "s1");
 
   std::vector<double> ratios;
@@ -120,11 +120,9 @@ std::string error_progression_svg(const std::vector<double>& history,
 }
 
 std::string color_bar_svg(double scale_mm, double tolerance_mm, int width_px) {
-  const double w = std::max(width_px, 200), bar_left = 24, bar_w = w - 48, bar_top = 24,
-               bar_h = 18;
+  const double w = std::max(width_px, 200), bar_left = 24, bar_w = w - 48, bar_top = 24, bar_h = 18;
   std::ostringstream svg;
-  svg << "<svg class='colorbar' viewBox='0 0 "
-      << svg_number(w) << " 64' width='" << svg_number(w)
+  svg << "<svg class='colorbar' viewBox='0 0 " << svg_number(w) << " 64' width='" << svg_number(w)
       << "' height='64' role='img' aria-label='deviation colour scale in mm'>"
       << "<defs><linearGradient id='devscale' x1='0' x2='1' y1='0' y2='0'>";
   for (int i = 0; i <= 8; ++i) {

@@ -12,9 +12,9 @@ namespace springscan::report {
 double nice_step(double range, int target_ticks);
 
 struct ErrorPlotSettings {
-  int panel_width_px = 340;   ///< each of the two panels
+  int panel_width_px = 340;  ///< each of the two panels
   int panel_height_px = 220;
-  double ratio_stop = 0.0;    ///< the ICP stop threshold on E(i)/E(i-1), drawn when > 0
+  double ratio_stop = 0.0;  ///< the ICP stop threshold on E(i)/E(i-1), drawn when > 0
 };
 
 /// Two panels: E(i) over the iterations, and the quotient E(i)/E(i-1) with the line 1.0 (the

@@ -65,8 +65,8 @@ analysis::Expected<std::string> encode_png(const RgbImage& image, const PngSetti
   if (image.width <= 0 || image.height <= 0)
     return analysis::fail("encode_png: empty image (" + std::to_string(image.width) + " x " +
                           std::to_string(image.height) + ")");
-  const std::size_t expected = static_cast<std::size_t>(image.width) *
-                               static_cast<std::size_t>(image.height) * 3;
+  const std::size_t expected =
+      static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) * 3;
   if (image.rgb.size() != expected)
     return analysis::fail("encode_png: pixel buffer holds " + std::to_string(image.rgb.size()) +
                           " bytes, width x height x 3 is " + std::to_string(expected));
@@ -74,18 +74,19 @@ analysis::Expected<std::string> encode_png(const RgbImage& image, const PngSetti
   uLongf packed_size = compressBound(static_cast<uLong>(raw.size()));
   std::string packed(packed_size, '\0');
   const int level = std::clamp(settings.compression_level, 0, 9);
-  const int status = compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size,
-                               reinterpret_cast<const Bytef*>(raw.data()),
-                               static_cast<uLong>(raw.size()), level);
-  if (status != Z_OK) return analysis::fail("encode_png: zlib compress2 failed, status " +
-                                            std::to_string(status));
+  const int status =
+      compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_size,
+                reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size()), level);
+  if (status != Z_OK)
+    return analysis::fail("encode_png: zlib compress2 failed, status " + std::to_string(status));
   packed.resize(packed_size);
 
   std::string png("\x89PNG\r\n\x1a\n", 8);
   std::string header;
   put_u32(header, static_cast<std::uint32_t>(image.width));
   put_u32(header, static_cast<std::uint32_t>(image.height));
-  header += std::string("\x08\x02\x00\x00\x00", 5);  // depth 8, truecolour, deflate, 0, no interlace
+  header +=
+      std::string("\x08\x02\x00\x00\x00", 5);  // depth 8, truecolour, deflate, 0, no interlace
   put_chunk(png, "IHDR", header);
   put_chunk(png, "IDAT", packed);
   put_chunk(png, "IEND", "");

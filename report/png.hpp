@@ -23,7 +23,8 @@ struct RgbImage {
   static RgbImage filled(int width, int height, Rgb fill);
   std::size_t offset(int x, int y) const {
     return (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
-            static_cast<std::size_t>(x)) * 3;
+            static_cast<std::size_t>(x)) *
+           3;
   }
   Rgb at(int x, int y) const {
     const std::size_t o = offset(x, y);

@@ -19,8 +19,8 @@ void shade(RgbImage& image, const std::vector<float>& depth, double mm_per_px, d
   const Eigen::Vector3d light = Eigen::Vector3d(-0.4, -0.5, 1.0).normalized();
   for (int y = 0; y + 1 < h; ++y) {
     for (int x = 0; x + 1 < w; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
-                            static_cast<std::size_t>(x);
+      const std::size_t i =
+          static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x);
       const float d = depth[i], dx = depth[i + 1], dy = depth[i + static_cast<std::size_t>(w)];
       if (d == kFar || dx == kFar || dy == kFar) continue;
       // Normal of the depth surface z(x, y) in units where one pixel is mm_per_px mm; depth
@@ -68,14 +68,16 @@ RgbImage render_points(const std::vector<Vec3>& points, const std::vector<Rgb>& 
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector2d px = view.to_pixel(points[k]);
     const double z = view.depth(points[k]);
-    if (!std::isfinite(px.x()) || !std::isfinite(px.y()) || !std::isfinite(z)) continue;
+    // Off-image (or NaN) points are dropped before the cast to int, which could overflow.
+    if (!(px.x() > -r - 1.0 && px.x() < w + r + 1.0 && px.y() > -r - 1.0 && px.y() < h + r + 1.0 &&
+          std::isfinite(z)))
+      continue;
     const int cx = static_cast<int>(std::floor(px.x())), cy = static_cast<int>(std::floor(px.y()));
-    if (cx + r < 0 || cy + r < 0 || cx - r >= w || cy - r >= h) continue;
     const float zf = static_cast<float>(z);
     for (int y = std::max(cy - r, 0); y <= std::min(cy + r, h - 1); ++y) {
       for (int x = std::max(cx - r, 0); x <= std::min(cx + r, w - 1); ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
-                              static_cast<std::size_t>(x);
+        const std::size_t i =
+            static_cast<std::size_t>(y) * static_cast<std::size_t>(w) + static_cast<std::size_t>(x);
         if (zf >= depth[i]) continue;
         depth[i] = zf;
         image.set(x, y, colors[k]);

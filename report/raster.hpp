@@ -18,9 +18,9 @@ std::vector<std::uint32_t> subsample_indices(std::size_t count, std::size_t max_
                                              std::uint32_t seed = 1);
 
 struct SplatSettings {
-  int radius_px = 1;               ///< each point covers a (2r+1) x (2r+1) square
+  int radius_px = 1;  ///< each point covers a (2r+1) x (2r+1) square
   Rgb background = {255, 255, 255};
-  double shading = 0.35;           ///< 0: flat colours; up to 1: darken where depth changes fast
+  double shading = 0.35;  ///< 0: flat colours; up to 1: darken where depth changes fast
 };
 
 /// Draws `points` with `colors` (one per point) into a new image of the view's size; the

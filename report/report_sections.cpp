@@ -40,10 +40,11 @@ std::string status_cell(const char* css, const char* word) {
 std::string header_html(const v1::InspectionReport& report) {
   const auto& input = report.input();
   const bool pass = report.verdict().pass();
-  std::string html = "<header class='top'><div><h1>Springback inspection report</h1><div "
-                     "class='sub'>Part <b>" +
-                     escape_html(input.part_id().empty() ? "(unnamed)" : input.part_id()) +
-                     "</b> &middot; CAD " + escape_html(input.cad_file()) + "</div></div>";
+  std::string html =
+      "<header class='top'><div><h1>Springback inspection report</h1><div "
+      "class='sub'>Part <b>" +
+      escape_html(input.part_id().empty() ? "(unnamed)" : input.part_id()) + "</b> &middot; CAD " +
+      escape_html(input.cad_file()) + "</div></div>";
   html += "<div class='meta'>" + escape_html(report.created_utc()) + "<br>Station " +
           escape_html(report.station().empty() ? "(offline)" : report.station()) + "<br>Job " +
           std::to_string(report.job_id()) + " &middot; result " +
@@ -86,20 +87,19 @@ std::string bend_table(const v1::InspectionReport& report) {
     html += std::string("<tr class='") + row + "' id='bend-" + std::to_string(bend.id()) +
             "'><td><b>B" + std::to_string(bend.id()) + "</b></td><td class='num'>" +
             fixed(bend.nominal_angle_deg(), 2) + "</td><td class='num'>" +
-            (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") +
-            "</td><td class='num'>" +
+            (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") + "</td><td class='num'>" +
             (measured ? signed_fixed(bend.springback_deg(), 2) : "&mdash;") +
             "</td><td class='num'>" + fixed(bend_tolerance(report, bend), 2) +
             "</td><td class='num'>" + fixed(bend.radius_mm(), 1) + "</td><td class='num'>" +
-            std::to_string(bend.segment_a()) + " / " + std::to_string(bend.segment_b()) +
-            "</td>" +
-            (!measured      ? status_cell("nm", "NOT MEASURED")
+            std::to_string(bend.segment_a()) + " / " + std::to_string(bend.segment_b()) + "</td>" +
+            (!measured     ? status_cell("nm", "NOT MEASURED")
              : bend.pass() ? status_cell("ok", "PASS")
                            : status_cell("ng", "FAIL")) +
             "</tr>";
   }
-  return html + "</table><p class='note'>Springback = nominal &minus; measured angle: positive "
-                "when the bend opened up.</p>";
+  return html +
+         "</table><p class='note'>Springback = nominal &minus; measured angle: positive "
+         "when the bend opened up.</p>";
 }
 
 std::string segment_table(const v1::InspectionReport& report) {
@@ -164,29 +164,33 @@ std::string deformation_table(const v1::InspectionReport& report) {
     sum += n;
   }
   const int n = report.compensation_size();
-  return kv_table({{"Correspondence method", field.method().empty() ? "n/a" : field.method()},
-                   {"Correspondences", std::to_string(field.vectors_size())},
-                   {"Model / scan points matched",
-                    std::to_string(field.model_points()) + " / " +
-                        std::to_string(field.scan_points())},
-                   {"Coverage", fixed(100.0 * field.coverage(), 1) + " %"},
-                   {"Total cost (sum of squared distances)", fixed(field.total_cost(), 3) + " mm\u00b2"},
-                   {"Optimality certified", yes_no(field.optimality_certified())},
-                   {"Compensation vectors", std::to_string(n)},
-                   {"Largest |c|", mm(longest)},
-                   {"Mean |c|", n > 0 ? mm(sum / n) : "n/a"}});
+  return kv_table(
+      {{"Correspondence method", field.method().empty() ? "n/a" : field.method()},
+       {"Correspondences", std::to_string(field.vectors_size())},
+       {"Model / scan points matched",
+        std::to_string(field.model_points()) + " / " + std::to_string(field.scan_points())},
+       {"Coverage", fixed(100.0 * field.coverage(), 1) + " %"},
+       {"Total cost (sum of squared distances)", fixed(field.total_cost(), 3) + " mm\u00b2"},
+       {"Optimality certified", yes_no(field.optimality_certified())},
+       {"Compensation vectors", std::to_string(n)},
+       {"Largest |c|", mm(longest)},
+       {"Mean |c|", n > 0 ? mm(sum / n) : "n/a"}});
 }
 
 std::string timings_table(const v1::Timings& t) {
-  const std::vector<std::pair<const char*, double>> stages = {
-      {"Load", t.load()},           {"Model sampling", t.model()},
-      {"Reduction", t.reduce()},    {"Global fit", t.global_fit()},
-      {"Deviation", t.deviation()}, {"Local fits", t.local_fits()},
-      {"Deformation", t.deformation()}, {"Report", t.report()}};
+  const std::vector<std::pair<const char*, double>> stages = {{"Load", t.load()},
+                                                              {"Model sampling", t.model()},
+                                                              {"Reduction", t.reduce()},
+                                                              {"Global fit", t.global_fit()},
+                                                              {"Deviation", t.deviation()},
+                                                              {"Local fits", t.local_fits()},
+                                                              {"Deformation", t.deformation()},
+                                                              {"Report", t.report()}};
   double longest = 1e-9;
   for (const auto& s : stages) longest = std::max(longest, s.second);
-  std::string html = "<table class='timings'><tr><th>Stage</th><th class='num'>Time [ms]</th>"
-                     "<th></th></tr>";
+  std::string html =
+      "<table class='timings'><tr><th>Stage</th><th class='num'>Time [ms]</th>"
+      "<th></th></tr>";
   for (const auto& [name, ms] : stages) {
     const double width = std::clamp(ms / longest, 0.0, 1.0) * 160.0;
     html += std::string("<tr><td>") + name + "</td><td class='num'>" + fixed(ms, 1) +

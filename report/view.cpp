@@ -8,10 +8,14 @@ namespace springscan::report {
 
 ViewBasis view_basis(ViewKind kind) {
   switch (kind) {
-    case ViewKind::kTop: return {Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitZ()};
-    case ViewKind::kFront: return {Vec3::UnitX(), Vec3::UnitZ(), Vec3::UnitY()};
-    case ViewKind::kSide: return {Vec3::UnitY(), Vec3::UnitZ(), -Vec3::UnitX()};
-    case ViewKind::kIsometric: break;
+    case ViewKind::kTop:
+      return {Vec3::UnitX(), Vec3::UnitY(), -Vec3::UnitZ()};
+    case ViewKind::kFront:
+      return {Vec3::UnitX(), Vec3::UnitZ(), Vec3::UnitY()};
+    case ViewKind::kSide:
+      return {Vec3::UnitY(), Vec3::UnitZ(), -Vec3::UnitX()};
+    case ViewKind::kIsometric:
+      break;
   }
   // The viewer sits at (+1, -1, +1): front-right-top. right = forward x up keeps the frame
   // right-handed; up is +z made orthogonal to the viewing direction.
@@ -22,10 +26,14 @@ ViewBasis view_basis(ViewKind kind) {
 
 const char* view_name(ViewKind kind) {
   switch (kind) {
-    case ViewKind::kTop: return "Top";
-    case ViewKind::kFront: return "Front";
-    case ViewKind::kSide: return "Side (right)";
-    case ViewKind::kIsometric: return "Isometric";
+    case ViewKind::kTop:
+      return "Top";
+    case ViewKind::kFront:
+      return "Front";
+    case ViewKind::kSide:
+      return "Side (right)";
+    case ViewKind::kIsometric:
+      return "Isometric";
   }
   return "?";
 }

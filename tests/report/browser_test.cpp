@@ -2,11 +2,10 @@
 // that must not be blank, and its DOM must hold the bend rows. Skips only where Chromium is
 // not installed. The browser runs in its own process group, killed after a timeout.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <chrono>
 #include <cstdlib>
@@ -99,9 +98,16 @@ class Browser : public ::testing::Test {
     if (!dir_.empty()) fs::remove_all(dir_);
   }
   std::vector<std::string> browser_args(const std::string& profile) const {
-    return {chromium_, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
-            "--no-first-run", "--disable-background-networking", "--disable-component-update",
-            "--disable-sync", "--user-data-dir=" + (dir_ / profile).string(),
+    return {chromium_,
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--user-data-dir=" + (dir_ / profile).string(),
             "--window-size=1200,1600"};
   }
   std::string chromium_;
@@ -130,7 +136,8 @@ TEST_F(Browser, ScreenshotShowsTheRenderedReport) {
   // The red FAIL banner and the colour maps: many colours, a good share of ink.
   EXPECT_GT(colours.size(), 500u);
   EXPECT_GT(non_white, n / 10);
-  const std::uint8_t* banner = png->pixels.data() +
+  const std::uint8_t* banner =
+      png->pixels.data() +
       (static_cast<std::size_t>(120) * static_cast<std::size_t>(png->width) + 600) *
           static_cast<std::size_t>(png->channels);
   EXPECT_GT(banner[0], 150);  // the FAIL banner is red

@@ -1,7 +1,6 @@
 // `springscan report REPORT.pb --out FILE` end to end: the built CLI renders a saved report,
 // with and without deviation.ply beside it, and names a bad input file.
 #include <gtest/gtest.h>
-
 #include <sys/wait.h>
 #include <unistd.h>
 

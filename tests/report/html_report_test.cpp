@@ -1,7 +1,5 @@
 // The HTML report's structure: verdict, bend rows, escaping, no network references, embedded
 // pictures that decode, and the writer.
-#include "report/report_html.hpp"
-
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -12,6 +10,7 @@
 #include "report/figures.hpp"
 #include "report/html_text.hpp"
 #include "report/plots.hpp"
+#include "report/report_html.hpp"
 #include "tests/report/png_decode.hpp"
 #include "tests/report/report_fixture.hpp"
 
@@ -61,7 +60,7 @@ TEST_F(HtmlReport, StartsWithTheVerdictAndItsReasons) {
 TEST_F(HtmlReport, HasOneRowPerBendWithItsNumbersAndResult) {
   EXPECT_EQ(count_of(*html_, "<tr class='bend "), 4u);
   const std::string b1 = bend_row(*html_, 1), b2 = bend_row(*html_, 2), b4 = bend_row(*html_, 4);
-  EXPECT_NE(b1.find(">89.60<"), std::string::npos) << b1;   // measured = 90 - 0.4
+  EXPECT_NE(b1.find(">89.60<"), std::string::npos) << b1;  // measured = 90 - 0.4
   EXPECT_NE(b1.find(">+0.40<"), std::string::npos) << b1;
   EXPECT_NE(b1.find(">PASS<"), std::string::npos) << b1;
   EXPECT_NE(b2.find(">87.60<"), std::string::npos) << b2;
@@ -98,8 +97,8 @@ TEST_F(HtmlReport, EmbeddedViewsDecodeAndShowThePart) {
   std::string bytes;
   int bits = 0, value = 0;
   for (char c : b64) {
-    const auto pos = std::string("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/")
-                         .find(c);
+    const auto pos =
+        std::string("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/").find(c);
     if (pos == std::string::npos) break;
     value = (value << 6) | static_cast<int>(pos);
     if ((bits += 6) >= 8) bytes.push_back(static_cast<char>((value >> (bits -= 8)) & 0xff));
@@ -179,7 +178,8 @@ TEST(HtmlReportAlone, SamePageForAnyThreadCount) {
   ReportSettings one, many;
   one.threads = 1;
   many.threads = 3;
-  EXPECT_EQ(*render_report_html(f.report, f.cloud, one), *render_report_html(f.report, f.cloud, many));
+  EXPECT_EQ(*render_report_html(f.report, f.cloud, one),
+            *render_report_html(f.report, f.cloud, many));
 }
 
 TEST(HtmlText, EscapesAndEncodes) {
@@ -214,8 +214,8 @@ TEST(Figures, BendAxisSpansThePointsNearIt) {
   bend.mutable_axis_direction()->set_y(2);  // not unit: normalised inside
   bend.set_radius_mm(2);
   std::vector<Vec3> points;
-  for (int y = 0; y <= 80; ++y) points.emplace_back(10.5, y, 0.5);   // along the axis
-  for (int x = 30; x <= 130; ++x) points.emplace_back(x, 200, 0);     // far away
+  for (int y = 0; y <= 80; ++y) points.emplace_back(10.5, y, 0.5);  // along the axis
+  for (int x = 30; x <= 130; ++x) points.emplace_back(x, 200, 0);   // far away
   const auto [a, b] = bend_axis_extent(bend, points);
   EXPECT_TRUE(a.isApprox(Vec3(10, 0, 0))) << a.transpose();
   EXPECT_TRUE(b.isApprox(Vec3(10, 80, 0))) << b.transpose();

@@ -36,12 +36,23 @@ bool unfilter(const std::string& raw, DecodedPng& img) {
       const auto x = static_cast<std::uint8_t>(in[i]);
       int predictor = 0;
       switch (filter) {
-        case 0: predictor = 0; break;
-        case 1: predictor = a; break;
-        case 2: predictor = b; break;
-        case 3: predictor = (a + b) / 2; break;
-        case 4: predictor = paeth(a, b, c); break;
-        default: return false;
+        case 0:
+          predictor = 0;
+          break;
+        case 1:
+          predictor = a;
+          break;
+        case 2:
+          predictor = b;
+          break;
+        case 3:
+          predictor = (a + b) / 2;
+          break;
+        case 4:
+          predictor = paeth(a, b, c);
+          break;
+        default:
+          return false;
       }
       out[i] = static_cast<std::uint8_t>(x + predictor);
     }
@@ -66,8 +77,8 @@ std::optional<DecodedPng> decode_png(std::string_view b, std::string* error) {
     const std::uint32_t length = read_u32(b, at);
     if (at + 12 + length > b.size()) return failed(error, "chunk runs past the end");
     const std::string_view type = b.substr(at + 4, 4), data = b.substr(at + 8, length);
-    const uLong crc = crc32(crc32(0L, Z_NULL, 0),
-                            reinterpret_cast<const Bytef*>(b.data() + at + 4), 4 + length);
+    const uLong crc =
+        crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(b.data() + at + 4), 4 + length);
     if (crc != read_u32(b, at + 8 + length))
       return failed(error, "CRC mismatch in " + std::string(type));
     if (type == "IHDR") {
@@ -90,8 +101,8 @@ std::optional<DecodedPng> decode_png(std::string_view b, std::string* error) {
       static_cast<std::size_t>(img.height));
   std::string raw(size, '\0');
   if (uncompress(reinterpret_cast<Bytef*>(raw.data()), &size,
-                 reinterpret_cast<const Bytef*>(idat.data()), static_cast<uLong>(idat.size())) !=
-      Z_OK)
+                 reinterpret_cast<const Bytef*>(idat.data()),
+                 static_cast<uLong>(idat.size())) != Z_OK)
     return failed(error, "IDAT does not inflate");
   raw.resize(size);
   if (!unfilter(raw, img)) return failed(error, "bad filter or size");

@@ -48,7 +48,8 @@ v1::Vec3 vec(const Vec3& v) {
   return out;
 }
 
-void fill_report(const std::vector<ProfileElement>& path, double total_mm, v1::InspectionReport& r) {
+void fill_report(const std::vector<ProfileElement>& path, double total_mm,
+                 v1::InspectionReport& r) {
   r.set_schema("springscan.report.v1");
   r.set_software_version("0.1.0");
   r.set_created_utc("2026-11-22T00:30:00Z");

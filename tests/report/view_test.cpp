@@ -1,5 +1,7 @@
 // Projections put known points at known pixels; the z-buffer keeps the nearest point; the
 // subsample and the colour scale behave as documented.
+#include "report/view.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +9,6 @@
 
 #include "report/colormap.hpp"
 #include "report/raster.hpp"
-#include "report/view.hpp"
 
 namespace springscan::report {
 namespace {
@@ -30,9 +31,9 @@ TEST(View, TopViewMapsXRightAndYUp) {
   // 220 x 120 image, margin 10: 200 x 100 free, so 2 px/mm for a 100 x 50 footprint.
   const auto view = fit_view(box_corners(), ViewKind::kTop, {220, 120, 10});
   EXPECT_DOUBLE_EQ(view.scale_px_per_mm, 2.0);
-  expect_pixel(view, {10, 20, 30}, 10, 110);    // x min, y min: lower left
-  expect_pixel(view, {110, 70, 50}, 210, 10);   // upper right
-  expect_pixel(view, {60, 45, 0}, 110, 60);     // centre, any height
+  expect_pixel(view, {10, 20, 30}, 10, 110);                  // x min, y min: lower left
+  expect_pixel(view, {110, 70, 50}, 210, 10);                 // upper right
+  expect_pixel(view, {60, 45, 0}, 110, 60);                   // centre, any height
   EXPECT_LT(view.depth({0, 0, 50}), view.depth({0, 0, 30}));  // higher is nearer from above
 }
 
