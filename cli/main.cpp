@@ -13,6 +13,7 @@ int version_main(int argc, char** argv);
 int match_main(int argc, char** argv);
 int report_main(int argc, char** argv);
 int scan_main(int argc, char** argv);
+int convert_main(int argc, char** argv);
 
 namespace {
 
@@ -21,6 +22,7 @@ const Command kCommands[] = {
     {"match", "pair model and scan points by exact min-cost matching", match_main},
     {"report", "render the HTML report again from a saved report.pb", report_main},
     {"scan", "acquire one scan from the configured USB scanner", scan_main},
+    {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", convert_main},
 };
 
 void print_usage() {
