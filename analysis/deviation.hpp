@@ -17,6 +17,8 @@ namespace springscan::analysis {
 struct DeviationSettings {
   double tolerance_mm = 0.5;    ///< |signed distance| beyond this is out of tolerance
   double color_scale_mm = 0.0;  ///< |d| shown as full blue/red; 0 = tolerance_mm
+  double cell_size_mm = 0.0;    ///< grid of the batched nearest search; 0 = 3 x the median
+                                ///< model sample spacing (speed only: the result is exact)
   int threads = 0;              ///< worker threads, 0 = all cores; no effect on the result
 };
 
@@ -42,6 +44,13 @@ struct DeviationResult {
 /// Errors: non-finite points, samples without normals, a tree that does not match the samples.
 Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
                                            const PartModel& model, const KdTree& model_tree,
+                                           const DeviationSettings& settings = {});
+
+/// The nearest model sample (index into model_tree) of every point, exactly (ties: the lowest
+/// index). Points are grouped in grid cells; one radius query per cell bounds every cell
+/// point's candidates, so most points need only a short brute force. Parallel, deterministic.
+std::vector<std::uint32_t> nearest_samples(const std::vector<Vec3>& points,
+                                           const KdTree& model_tree,
                                            const DeviationSettings& settings = {});
 
 /// Statistics of signed distances (deterministic, exact percentile).

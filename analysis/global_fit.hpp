@@ -15,12 +15,15 @@ namespace springscan::analysis {
 struct GlobalFitSettings {
   bool pca_initial_alignment = true;  ///< false: ICP starts from the identity (pre-aligned data)
   PcaAlignSettings pca;               ///< candidate search
+  double pca_model_divisions = 100.0; ///< candidates are scored on the model voxel-reduced to
+                                      ///< its box diagonal / this (0: the full model)
   IcpSettings icp;                    ///< the final ICP
 };
 
 struct GlobalFitResult {
   Transform T_cad_scan = Transform::Identity();  ///< maps scan coordinates into the CAD frame
-  double rms_initial_mm = 0.0;    ///< rms nearest distance of all given scan points, as given
+  double rms_initial_mm = 0.0;    ///< rms nearest distance of the scan points as given, the
+                                  ///< farthest icp.trimmed_fraction left out (outliers)
   double rms_after_pca_mm = 0.0;  ///< the same after the pure PCA alignment (paper Figure 5)
   double rms_final_mm = 0.0;      ///< the same after ICP
   IcpResult icp;                  ///< history, iterations, inliers, converged, stop reason
@@ -34,8 +37,9 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
                                      const std::vector<Vec3>& model_normals,
                                      const GlobalFitSettings& settings = {});
 
-/// Root mean square nearest distance of T * points to the tree, mm (parallel, deterministic).
+/// Root mean square nearest distance of T * points to the tree, mm, over the closest
+/// (1 - trimmed_fraction) of the points (parallel, deterministic).
 double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
-                            const KdTree& tree, int threads = 0);
+                            const KdTree& tree, double trimmed_fraction = 0.0, int threads = 0);
 
 }  // namespace springscan::analysis

@@ -234,7 +234,9 @@ Expected<IcpResult> icp(const std::vector<Vec3>& source, const KdTree& target,
     result.converged = true;
     if (small_step) { result.stop_reason = "increment"; break; }
     if (std::sqrt(E) <= s.min_error_mm) { result.stop_reason = "error"; break; }
-    if (i > 0 && previous > 0.0 && E <= previous && E / previous > s.error_ratio_stop) {
+    // Paper Figure 6b: E(i)/E(i-1) near 1 means no further progress. A rise counts too: with
+    // trimming, the kept set can flip between two near-equal states at the noise floor.
+    if (i > 1 && previous > 0.0 && E / previous > s.error_ratio_stop) {
       result.stop_reason = "ratio";
       break;
     }

@@ -51,76 +51,84 @@ std::optional<Error> check_input(const std::vector<Vec3>& points, const KCenterS
   return std::nullopt;
 }
 
-struct Bucket {
-  std::size_t begin = 0, end = 0;  // range in the bucket-ordered arrays
-  Vec3 lo, hi;                     // bounding box
-  double far_d2 = 0.0;             // largest distance to the centers inside this bucket
-  std::uint32_t far_index = 0;     // its original index (lowest on ties)
+// A KD tree over the points (QuickFPS-style): every node keeps its box and the farthest
+// distance to the center set inside its subtree, so a new center descends only into nodes
+// whose box is closer than that farthest distance, and the next center is read at the root.
+struct Node {
+  Vec3 lo, hi;                    // bounding box
+  double far_d2 = std::numeric_limits<double>::infinity();  // max distance^2 in the subtree
+  std::uint32_t far_index = 0;    // its original index (lowest on ties)
+  std::size_t begin = 0, end = 0; // leaf: range in the tree-ordered arrays
+  std::int32_t left = -1, right = -1;  // children, -1 for a leaf
 };
 
-// The bucket-ordered copy of the points with their current distance to the center set.
-struct BucketedPoints {
-  std::vector<Vec3> points;
-  std::vector<std::uint32_t> index;
-  std::vector<double> d2;
-  std::vector<Bucket> buckets;
+struct Entry {
+  Vec3 p;
+  std::uint32_t index;
 };
 
-// Median splits along the longest box axis until a bucket holds at most `leaf` points.
-BucketedPoints make_buckets(const std::vector<Vec3>& points, std::size_t leaf) {
-  BucketedPoints out;
-  std::vector<std::uint32_t> order(points.size());
-  std::iota(order.begin(), order.end(), 0u);
-  std::vector<std::pair<std::size_t, std::size_t>> stack{{0, points.size()}};
-  while (!stack.empty()) {
-    const auto [begin, end] = stack.back();
-    stack.pop_back();
-    Bucket b;
-    b.begin = begin;
-    b.end = end;
-    b.lo = b.hi = points[order[begin]];
-    for (std::size_t i = begin; i < end; ++i) {
-      b.lo = b.lo.cwiseMin(points[order[i]]);
-      b.hi = b.hi.cwiseMax(points[order[i]]);
-    }
-    if (end - begin <= leaf) {
-      out.buckets.push_back(b);
-      continue;
-    }
-    int axis = 0;
-    (b.hi - b.lo).maxCoeff(&axis);
-    const std::size_t mid = begin + (end - begin) / 2;
-    std::nth_element(order.begin() + static_cast<std::ptrdiff_t>(begin),
-                     order.begin() + static_cast<std::ptrdiff_t>(mid),
-                     order.begin() + static_cast<std::ptrdiff_t>(end),
-                     [&](std::uint32_t a, std::uint32_t c) {
-                       const double pa = points[a][axis], pc = points[c][axis];
-                       return pa < pc || (pa == pc && a < c);
-                     });
-    stack.push_back({mid, end});
-    stack.push_back({begin, mid});
+struct PointTree {
+  std::vector<Entry> entries;  // points in tree order with their original indices
+  std::vector<double> d2;      // current distance^2 to the center set, tree order
+  std::vector<Node> nodes;     // nodes[0] is the root
+};
+
+// Median splits along the longest box axis until a leaf holds at most `leaf` points.
+std::int32_t build(PointTree& t, std::size_t begin, std::size_t end, std::size_t leaf) {
+  const auto id = static_cast<std::int32_t>(t.nodes.size());
+  t.nodes.emplace_back();
+  Node n;
+  n.begin = begin;
+  n.end = end;
+  n.lo = n.hi = t.entries[begin].p;
+  for (std::size_t i = begin; i < end; ++i) {
+    n.lo = n.lo.cwiseMin(t.entries[i].p);
+    n.hi = n.hi.cwiseMax(t.entries[i].p);
   }
-  out.index = std::move(order);
-  out.points.reserve(points.size());
-  for (auto i : out.index) out.points.push_back(points[i]);
-  out.d2.assign(points.size(), std::numeric_limits<double>::infinity());
-  return out;
+  if (end - begin > leaf) {
+    int axis = 0;
+    (n.hi - n.lo).maxCoeff(&axis);
+    const std::size_t mid = begin + (end - begin) / 2;
+    std::nth_element(t.entries.begin() + static_cast<std::ptrdiff_t>(begin),
+                     t.entries.begin() + static_cast<std::ptrdiff_t>(mid),
+                     t.entries.begin() + static_cast<std::ptrdiff_t>(end),
+                     [axis](const Entry& a, const Entry& b) {
+                       return a.p[axis] < b.p[axis] || (a.p[axis] == b.p[axis] && a.index < b.index);
+                     });
+    n.left = build(t, begin, mid, leaf);
+    n.right = build(t, mid, end, leaf);
+  }
+  t.nodes[static_cast<std::size_t>(id)] = n;
+  return id;
 }
 
-// Lowers the distances of bucket b's points by the new center c and refreshes its farthest.
-void update_bucket(BucketedPoints& bp, Bucket& b, const Vec3& c) {
-  double far_d2 = -1.0;
-  std::uint32_t far_index = 0;
-  for (std::size_t i = b.begin; i < b.end; ++i) {
-    const double d = squared_distance(bp.points[i], c);
-    if (d < bp.d2[i]) bp.d2[i] = d;
-    if (farther(bp.d2[i], bp.index[i], far_d2, far_index)) {
-      far_d2 = bp.d2[i];
-      far_index = bp.index[i];
+// Lowers distances by the new center c below node `id` and refreshes the subtree maxima.
+void update(PointTree& t, std::int32_t id, const Vec3& c) {
+  Node& n = t.nodes[static_cast<std::size_t>(id)];
+  // Prune: if the box is no closer than the farthest distance inside, no distance can drop.
+  if (squared_distance_to_box(c, n.lo, n.hi) >= n.far_d2) return;
+  if (n.left < 0) {
+    double far_d2 = -1.0;
+    std::uint32_t far_index = 0;
+    for (std::size_t i = n.begin; i < n.end; ++i) {
+      const double d = squared_distance(t.entries[i].p, c);
+      if (d < t.d2[i]) t.d2[i] = d;
+      if (farther(t.d2[i], t.entries[i].index, far_d2, far_index)) {
+        far_d2 = t.d2[i];
+        far_index = t.entries[i].index;
+      }
     }
+    n.far_d2 = far_d2;
+    n.far_index = far_index;
+    return;
   }
-  b.far_d2 = far_d2;
-  b.far_index = far_index;
+  update(t, n.left, c);
+  update(t, n.right, c);
+  const Node& a = t.nodes[static_cast<std::size_t>(n.left)];
+  const Node& b = t.nodes[static_cast<std::size_t>(n.right)];
+  const bool take_b = farther(b.far_d2, b.far_index, a.far_d2, a.far_index);
+  n.far_d2 = take_b ? b.far_d2 : a.far_d2;
+  n.far_index = take_b ? b.far_index : a.far_index;
 }
 
 }  // namespace
@@ -156,23 +164,20 @@ Expected<KCenterResult> kcenter_reduce(const std::vector<Vec3>& points,
   if (auto error = check_input(points, settings)) return *error;
   KCenterResult result;
   if (points.empty()) return result;
-  BucketedPoints bp = make_buckets(points, std::max<std::size_t>(settings.bucket_size, 1));
+  PointTree tree;
+  tree.entries.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    tree.entries.push_back({points[i], static_cast<std::uint32_t>(i)});
+  tree.d2.assign(points.size(), std::numeric_limits<double>::infinity());
+  tree.nodes.reserve(2 * points.size() / std::max<std::size_t>(settings.bucket_size, 1) + 2);
+  build(tree, 0, points.size(), std::max<std::size_t>(settings.bucket_size, 1));
   std::uint32_t next = settings.start_index;
   double far_d2 = std::numeric_limits<double>::infinity();
   while (result.centers.empty() || !should_stop(result.centers.size(), far_d2, settings)) {
     result.centers.push_back(next);
-    const Vec3 c = points[next];
-    far_d2 = -1.0;
-    for (Bucket& b : bp.buckets) {
-      // Prune (QuickFPS idea): if the box is no closer than the bucket's farthest distance,
-      // the new center cannot lower any distance inside it.
-      if (squared_distance_to_box(c, b.lo, b.hi) < b.far_d2 || result.centers.size() == 1)
-        update_bucket(bp, b, c);
-      if (farther(b.far_d2, b.far_index, far_d2, next)) {
-        far_d2 = b.far_d2;
-        next = b.far_index;
-      }
-    }
+    update(tree, 0, points[next]);
+    far_d2 = tree.nodes[0].far_d2;  // the farthest point from the set, lowest index on ties
+    next = tree.nodes[0].far_index;
   }
   result.covering_radius_mm = std::sqrt(std::max(far_d2, 0.0));
   return result;

@@ -9,7 +9,7 @@
 // centers are added while the farthest remaining point is at least `radius_mm` away.
 //
 // Determinism: the first center is `start_index`; ties in "farthest" go to the lowest index.
-// `kcenter_reduce` (spatially pruned, QuickFPS-like buckets) and `kcenter_reduce_naive` (the
+// `kcenter_reduce` (spatially pruned, QuickFPS-like KD tree) and `kcenter_reduce_naive` (the
 // O(n k) loop) select exactly the same centers in the same order.
 
 #include <cstddef>
@@ -25,7 +25,7 @@ struct KCenterSettings {
   std::size_t center_count = 0;  ///< > 0: select this many centers (variant "k")
   double radius_mm = 10.0;       ///< otherwise: stop when the farthest point is closer (paper: 10)
   std::uint32_t start_index = 0; ///< the first center (the paper: "an arbitrary point")
-  std::size_t bucket_size = 128; ///< points per spatial bucket of the fast version
+  std::size_t bucket_size = 128; ///< points per KD-tree leaf of the fast version
 };
 
 struct KCenterResult {
@@ -33,9 +33,11 @@ struct KCenterResult {
   double covering_radius_mm = 0.0;     ///< max over points of the distance to the nearest center
 };
 
-/// Fast greedy k-center: points are split into KD buckets with bounding boxes; a new center only
-/// visits buckets whose box lies closer than the bucket's current farthest distance. Expected
-/// time about O(n log n + k * (n / bucket_size)). Errors: non-finite points, start out of range.
+/// Fast greedy k-center: a KD tree whose nodes keep their box and the farthest distance to the
+/// centers inside them; a new center descends only into nodes whose box lies closer than that
+/// distance, and the next center is the root's farthest point. O(n log n) to build, then about
+/// O(log n + points near the new center) per center on surfaces. Errors: non-finite points,
+/// start out of range. Not thread-parallel (one pass per center).
 Expected<KCenterResult> kcenter_reduce(const std::vector<Vec3>& points,
                                        const KCenterSettings& settings = {});
 

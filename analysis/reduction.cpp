@@ -1,5 +1,6 @@
 #include "analysis/reduction.hpp"
 
+#include <algorithm>
 #include <string>
 
 #include "analysis/parallel.hpp"
@@ -12,6 +13,21 @@ std::vector<Vec3> pick(const std::vector<Vec3>& points, const std::vector<std::u
   out.reserve(which.size());
   for (auto i : which) out.push_back(points[i]);
   return out;
+}
+
+// Keeps the voxels holding at least `fill` times the median voxel count (at least 1 point).
+PointCloud drop_sparse_voxels(const VoxelResult& voxels, double fill, std::size_t& dropped) {
+  std::vector<std::uint32_t> counts = voxels.counts;
+  if (counts.empty() || !(fill > 0.0)) return voxels.cloud;
+  const auto mid = counts.begin() + static_cast<std::ptrdiff_t>(counts.size() / 2);
+  std::nth_element(counts.begin(), mid, counts.end());
+  const double min_count = std::max(1.0, fill * static_cast<double>(*mid));
+  std::vector<std::uint32_t> keep;
+  keep.reserve(voxels.counts.size());
+  for (std::size_t i = 0; i < voxels.counts.size(); ++i)
+    if (static_cast<double>(voxels.counts[i]) >= min_count) keep.push_back(static_cast<std::uint32_t>(i));
+  dropped = voxels.counts.size() - keep.size();
+  return select(voxels.cloud, keep);
 }
 
 }  // namespace
@@ -41,7 +57,7 @@ Expected<ReductionOutcome> reduce(const PointCloud& scan, const PointCloud& mode
   // Voxel centroids: one fit point per occupied cell, noise averaged, density evened out.
   auto voxels = voxel_reduce(scan, {out.voxel_size_mm});
   if (!voxels) return fail("reduce: scan " + voxels.message());
-  out.scan_for_fit = std::move(voxels->cloud);
+  out.scan_for_fit = drop_sparse_voxels(*voxels, settings.min_voxel_fill, out.sparse_voxels_dropped);
   // Paper §2: k-center with the same threshold w on both sets gives similar distributions.
   auto model_kc = kcenter_reduce(model_samples.points, settings.kcenter);
   if (!model_kc) return fail("reduce: model " + model_kc.message());

@@ -14,11 +14,13 @@ int match_main(int argc, char** argv);
 int report_main(int argc, char** argv);
 int scan_main(int argc, char** argv);
 int convert_main(int argc, char** argv);
+int analyze_main(int argc, char** argv);
 
 namespace {
 
 const Command kCommands[] = {
     {"version", "print the version", version_main},
+    {"analyze", "fit a scan to its part and measure the deviation (report files)", analyze_main},
     {"match", "pair model and scan points by exact min-cost matching", match_main},
     {"report", "render the HTML report again from a saved report.pb", report_main},
     {"scan", "acquire one scan from the configured USB scanner", scan_main},
