@@ -2,7 +2,6 @@
 // point file) + scan in, report.json, report.pb and deviation.ply out.
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <chrono>
 #include <cstdio>
@@ -16,6 +15,7 @@
 #include "analysis/pipeline.hpp"
 #include "analysis/point_io.hpp"
 #include "analysis/point_model.hpp"
+#include "analysis/report_files.hpp"
 #include "cli/cli_common.hpp"
 
 namespace springscan::cli {
@@ -82,28 +82,6 @@ analysis::Expected<analysis::PartModel> load_point_model(const std::string& path
   auto model = analysis::part_model_from_points(*cloud);
   if (!model) return analysis::fail(path + ": " + model.message());
   return std::move(model->model);
-}
-
-// report.json (proto field names), report.pb and deviation.ply, each written atomically.
-analysis::Expected<bool> write_outputs(const std::string& dir,
-                                       const analysis::InspectionOutcome& outcome) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) return analysis::fail(dir + ": cannot create the directory: " + ec.message());
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.always_print_primitive_fields = true;
-  options.add_whitespace = true;
-  if (!google::protobuf::util::MessageToJsonString(outcome.report, &json, options).ok())
-    return analysis::fail("report: JSON conversion failed");
-  auto written = analysis::write_file_atomically(dir + "/report.json", json);
-  if (written) written = analysis::write_file_atomically(dir + "/report.pb",
-                                                         outcome.report.SerializeAsString());
-  if (!written) return written;
-  analysis::PointWriteOptions ply;
-  ply.scalar_name = "signed_deviation_mm";
-  return analysis::write_point_cloud(dir + "/deviation.ply", outcome.deviation_cloud, ply);
 }
 
 }  // namespace
@@ -179,7 +157,10 @@ int analyze_main(int argc, char** argv) {
   timings.set_total(timings.total() + load_ms + model_ms);
   for (const auto& warning : report.warnings()) log.warning(warning);
 
-  auto written = write_outputs(args.get("out"), *outcome);
+  std::error_code ec;
+  std::filesystem::create_directories(args.get("out"), ec);
+  if (ec) return fail_with(kName, args.get("out") + ": cannot create: " + ec.message(), kExitUsage);
+  auto written = analysis::write_report_files(args.get("out"), *outcome);
   if (!written) return fail_with(kName, written.message(), kExitUsage);
   char line[256];
   std::snprintf(line, sizeof line,
