@@ -15,6 +15,7 @@ int report_main(int argc, char** argv);
 int scan_main(int argc, char** argv);
 int convert_main(int argc, char** argv);
 int analyze_main(int argc, char** argv);
+int model_main(int argc, char** argv);
 
 namespace {
 
@@ -22,6 +23,7 @@ const Command kCommands[] = {
     {"version", "print the version", version_main},
     {"analyze", "fit a scan to its part and measure the deviation (report files)", analyze_main},
     {"match", "pair model and scan points by exact min-cost matching", match_main},
+    {"model", "show a CAD file's faces, flanges and bends (text or JSON)", model_main},
     {"report", "render the HTML report again from a saved report.pb", report_main},
     {"scan", "acquire one scan from the configured USB scanner", scan_main},
     {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", convert_main},
