@@ -166,11 +166,15 @@ void JobRunner::run(const RunnerJob& job) {
   post(RunnerEvent{RunnerEvent::Kind::kAcquired, job.record, {}, {}, {}});
   auto outcome = analyze_(job.request.part_id, *scan);
   if (!outcome) {
-    JobEnd end{regs::ResultCode::kAnalysisFailed, false, false, regs::ErrorCode::kAnalysisFailed,
+    const bool model = outcome.message().rfind(kPartModelErrorPrefix, 0) == 0;
+    JobEnd end{regs::ResultCode::kAnalysisFailed, false, false,
+               model ? regs::ErrorCode::kPartModelFailed : regs::ErrorCode::kAnalysisFailed,
                regs::ErrorDetail::kOther};
     log_.error(name + ": ANALYSIS FAILED: " + outcome.message() +
-               ". The station is in FAULT (ERROR_CODE 3). Check that the right part (PART_ID) "
-               "is on the fixture and clean, then set ERROR_RESET (coil 3).");
+               (model ? ". The station is in FAULT (ERROR_CODE 4). Check the part's cad_file in "
+                        "the config, then set ERROR_RESET (coil 3)."
+                      : ". The station is in FAULT (ERROR_CODE 3). Check that the right part "
+                        "(PART_ID) is on the fixture and clean, then set ERROR_RESET (coil 3)."));
     report.mutable_verdict()->add_reasons("analysis failed: " + outcome.message());
     report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan->size()));
     post(finish(job, std::move(report), nullptr, end));

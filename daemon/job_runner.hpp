@@ -28,6 +28,10 @@
 
 namespace springscan::daemon {
 
+/// Starts the message of an AnalyzeFn error that is about the part's CAD model rather than the
+/// scan: the runner then reports ERROR_CODE 4 (part model) instead of 3 (analysis).
+inline constexpr const char* kPartModelErrorPrefix = "part model: ";
+
 /// Analyses one scan of part `part_id`. Called on the runner's thread, one call at a time.
 using AnalyzeFn = std::function<analysis::Expected<analysis::InspectionOutcome>(
     std::uint16_t part_id, const analysis::PointCloud& scan)>;
