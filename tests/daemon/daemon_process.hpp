@@ -63,9 +63,19 @@ class DaemonProcess {
   int port() const { return port_; }
   pid_t pid() const { return pid_; }
   /// Sends `signal` and reaps the child; returns its wait status.
+  /// A child that has not exited 10 s after `signal` is killed (SIGKILL), as systemd does
+  /// after TimeoutStopSec.
   int stop(int signal) {
     int status = 0;
     ::kill(pid_, signal);
+    for (int i = 0; i < 1000; ++i) {
+      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
+        pid_ = -1;
+        return status;
+      }
+      ::usleep(10000);
+    }
+    ::kill(pid_, SIGKILL);
     ::waitpid(pid_, &status, 0);
     pid_ = -1;
     return status;
