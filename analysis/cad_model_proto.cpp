@@ -1,5 +1,7 @@
 #include "analysis/cad_model_proto.hpp"
 
+#include <cmath>
+
 namespace springscan::analysis {
 namespace {
 
@@ -102,6 +104,30 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
   }
   model.segmentation.other_faces.assign(message.other_faces().begin(), message.other_faces().end());
   return model;
+}
+
+Expected<CadModelSettings> from_proto(const v1::ModelSettings& message,
+                                      CadModelSettings settings) {
+  if (message.has_sample_count()) {
+    if (message.sample_count() < 100 || message.sample_count() > 10'000'000)
+      return fail("settings: model.sample_count = " + std::to_string(message.sample_count()) +
+                  " (allowed: 100 to 10000000)");
+    settings.sampling.sample_count = message.sample_count();
+  }
+  if (message.has_linear_deflection_mm()) {
+    if (!(message.linear_deflection_mm() > 0.0) || !std::isfinite(message.linear_deflection_mm()))
+      return fail("settings: model.linear_deflection_mm = " +
+                  std::to_string(message.linear_deflection_mm()) + " (must be > 0)");
+    settings.import.linear_deflection_mm = message.linear_deflection_mm();
+  }
+  if (message.has_angular_deflection_deg()) {
+    const double value = message.angular_deflection_deg();
+    if (!(value > 0.0 && value < 90.0))
+      return fail("settings: model.angular_deflection_deg = " + std::to_string(value) +
+                  " (must be in (0, 90))");
+    settings.import.angular_deflection_deg = value;
+  }
+  return settings;
 }
 
 }  // namespace springscan::analysis

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <string>
 
+#include "analysis/cad_model.hpp"
 #include "analysis/expected.hpp"
 #include "analysis/part_model.hpp"
 #include "proto/springscan.pb.h"
@@ -20,5 +21,11 @@ v1::CachedPartModel to_proto(const PartModel& model, const std::string& source_s
 
 /// The model without a distance. Errors: inconsistent sample arrays, face ids out of range.
 Expected<PartModel> from_proto(const v1::CachedPartModel& message);
+
+/// The analysis settings' model part (sample count, tessellation) applied over the C++ defaults.
+/// Errors name the field and the value: sample_count 100..10^7 (a settings file must not be
+/// able to size a huge allocation), deflections > 0, angular deflection below 90 degrees.
+Expected<CadModelSettings> from_proto(const v1::ModelSettings& message,
+                                      CadModelSettings settings = {});
 
 }  // namespace springscan::analysis

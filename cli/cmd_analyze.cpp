@@ -8,15 +8,15 @@
 #include <filesystem>
 #include <string>
 
-#include "analysis/cad_distance.hpp"
-#include "analysis/cad_import.hpp"
-#include "analysis/cad_sampling.hpp"
+#include "analysis/cad_model.hpp"
+#include "analysis/cad_model_proto.hpp"
 #include "analysis/file_io.hpp"
 #include "analysis/pipeline.hpp"
 #include "analysis/point_io.hpp"
 #include "analysis/point_model.hpp"
 #include "analysis/report_files.hpp"
 #include "cli/cli_common.hpp"
+#include "report/report_html.hpp"
 
 namespace springscan::cli {
 namespace {
@@ -54,26 +54,13 @@ analysis::Expected<v1::AnalysisSettings> read_settings(const std::string& path) 
   return settings;
 }
 
-// The CAD side from the cad engineer's loader, sampler and exact distance. No segmentation
-// yet: the stages that need bends and flanges report that they have none.
+// The CAD side: import, healing, even samples, segmentation into flanges and bends, and the
+// exact surface distance (analysis/cad_model.hpp).
 analysis::Expected<analysis::PartModel> load_cad_model(const std::string& path,
                                                        const v1::ModelSettings& m) {
-  auto shape = analysis::load_cad(path);
-  if (!shape) return analysis::fail(shape.message());
-  analysis::CadSamplingSettings sampling;
-  if (m.has_sample_count()) {
-    if (m.sample_count() < 100 || m.sample_count() > 10'000'000)
-      return analysis::fail("settings: model.sample_count = " + std::to_string(m.sample_count()) +
-                            " (100 to 10^7)");
-    sampling.sample_count = m.sample_count();
-  }
-  auto samples = analysis::sample_cad(*shape, sampling);
-  if (!samples) return analysis::fail(path + ": " + samples.message());
-  analysis::PartModel model;
-  model.samples = std::move(*samples);
-  model.face_count = shape->face_count();
-  model.distance = analysis::make_cad_distance(*shape);
-  return model;
+  auto settings = analysis::from_proto(m);
+  if (!settings) return analysis::fail(settings.message());
+  return analysis::load_part_model(path, *settings);
 }
 
 analysis::Expected<analysis::PartModel> load_point_model(const std::string& path) {
@@ -82,6 +69,28 @@ analysis::Expected<analysis::PartModel> load_point_model(const std::string& path
   auto model = analysis::part_model_from_points(*cloud);
   if (!model) return analysis::fail(path + ": " + model.message());
   return std::move(model->model);
+}
+
+// The verdict and the figures a quality engineer looks at first, on stdout.
+void print_summary(const v1::InspectionReport& report, const std::string& out_dir) {
+  std::printf("verdict: %s\n", report.verdict().pass() ? "PASS" : "FAIL");
+  for (const auto& reason : report.verdict().reasons()) std::printf("  - %s\n", reason.c_str());
+  std::printf("global fit: rms %.4f mm after %d iterations; deviation p95 %.4f mm, "
+              "%.1f%% beyond %.3g mm\n",
+              report.global_fit().rms_final(), report.global_fit().iterations(),
+              report.deviation().p95(), 100.0 * report.deviation().fraction_out_of_tolerance(),
+              report.deviation().tolerance_mm());
+  for (const auto& bend : report.bends()) {
+    if (!bend.measured()) {
+      std::printf("bend %d: nominal %.2f deg, not measured\n", bend.id(), bend.nominal_angle_deg());
+      continue;
+    }
+    std::printf("bend %d: nominal %.2f deg, measured %.2f deg, springback %+.3f deg (%s)\n",
+                bend.id(), bend.nominal_angle_deg(), bend.measured_angle_deg(),
+                bend.springback_deg(), bend.pass() ? "ok" : "out of tolerance");
+  }
+  std::printf("report: %s/report.html (also report.json, report.pb, deviation.ply); %.0f ms\n",
+              out_dir.c_str(), report.timings_ms().total());
 }
 
 }  // namespace
@@ -162,14 +171,9 @@ int analyze_main(int argc, char** argv) {
   if (ec) return fail_with(kName, args.get("out") + ": cannot create: " + ec.message(), kExitUsage);
   auto written = analysis::write_report_files(args.get("out"), *outcome);
   if (!written) return fail_with(kName, written.message(), kExitUsage);
-  char line[256];
-  std::snprintf(line, sizeof line,
-                "fit rms %.4f mm (%d iterations), deviation p95 %.4f mm, %.1f%% beyond %.3g mm; "
-                "%.0f ms",
-                report.global_fit().rms_final(), report.global_fit().iterations(),
-                report.deviation().p95(), 100.0 * report.deviation().fraction_out_of_tolerance(),
-                report.deviation().tolerance_mm(), timings.total());
-  std::printf("%s\n", line);
+  auto html = report::write_report_html_in_dir(args.get("out"), report, outcome->deviation_cloud);
+  if (!html) log.warning("report.html not written: " + html.message());
+  print_summary(report, args.get("out"));
   return kExitOk;
 }
 
