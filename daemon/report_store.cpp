@@ -1,5 +1,7 @@
 #include "daemon/report_store.hpp"
 
+#include "report/report_html.hpp"
+
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -163,6 +165,7 @@ Expected<std::string> ReportStore::persist(std::uint64_t record,
   google::protobuf::util::JsonPrintOptions options;
   options.preserve_proto_field_names = true;
   options.add_whitespace = true;
+  options.always_print_primitive_fields = true;  // verdict.pass = false must show (report-format.md)
   if (!google::protobuf::util::MessageToJsonString(report, &json, options).ok()) {
     return fail("report for record " + std::to_string(record) + ": JSON conversion failed");
   }
@@ -172,6 +175,10 @@ Expected<std::string> ReportStore::persist(std::uint64_t record,
     files.emplace_back("deviation.ply",
                        deviation_ply(*deviation_cloud, report.deviation().color_scale_mm()));
   }
+  // The page a quality engineer opens (issue 9); an empty cloud still renders, without pictures.
+  static const analysis::PointCloud kNoCloud;
+  auto html = report::render_report_html(report, deviation_cloud ? *deviation_cloud : kNoCloud);
+  if (html) files.emplace_back("report.html", std::move(*html));
   for (const auto& [name, bytes] : files) {
     auto written = write_file_durably(temp + "/" + name, bytes);
     if (!written) return fail(written.message());

@@ -4,9 +4,8 @@
 #include <memory>
 #include <mutex>
 
-#include "analysis/cad_distance.hpp"
-#include "analysis/cad_import.hpp"
-#include "analysis/cad_sampling.hpp"
+#include "analysis/cad_model.hpp"
+#include "analysis/cad_model_proto.hpp"
 #include "analysis/pipeline.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/protocol.hpp"
@@ -27,12 +26,14 @@ drivers::LinkSettings link_settings(const v1::ScannerConfig& config, std::uint16
   return link;
 }
 
-/// The CAD model of each part, loaded on first use (on the runner's thread) and kept. The
-/// model is the CAD import, even surface samples with exact normals, and the exact
-/// point-to-surface distance (DESIGN.md stages 1-2).
+/// The CAD model of each part, loaded on first use (on the runner's thread) and kept: import,
+/// even samples with exact normals, the segmentation into flanges and bends, and the exact
+/// point-to-surface distance (DESIGN.md stages 1-2). Models go through the on-disk cache
+/// (analysis/cad_model.hpp), so a restarted daemon skips IGES/STEP parsing and healing.
 class PartModels {
  public:
-  PartModels(const std::vector<PartEntry>& parts, Log& log) : log_(log) {
+  PartModels(const std::vector<PartEntry>& parts, std::string cache_dir, Log& log)
+      : log_(log), cache_dir_(std::move(cache_dir)) {
     for (const PartEntry& p : parts) parts_[p.part_id] = p;
   }
 
@@ -46,28 +47,38 @@ class PartModels {
     if (const auto cached = models_.find(part.part_id); cached != models_.end()) {
       return cached->second;
     }
-    const v1::ModelSettings& m = part.settings.model();
-    analysis::CadImportSettings import;
-    if (m.has_linear_deflection_mm()) import.linear_deflection_mm = m.linear_deflection_mm();
-    if (m.has_angular_deflection_deg()) import.angular_deflection_deg = m.angular_deflection_deg();
-    auto shape = analysis::load_cad(part.cad_file, import);
-    if (!shape) return analysis::fail(std::string(kPartModelErrorPrefix) + shape.message());
-    analysis::CadSamplingSettings sampling;
-    if (m.has_sample_count()) sampling.sample_count = m.sample_count();
-    auto samples = analysis::sample_cad(*shape, sampling);
-    if (!samples) return analysis::fail(std::string(kPartModelErrorPrefix) + samples.message());
-    auto model = std::make_shared<analysis::PartModel>();
-    model->samples = std::move(*samples);
-    model->face_count = shape->face_count();
-    model->distance = analysis::make_cad_distance(*shape);
+    auto settings = analysis::from_proto(part.settings.model());
+    if (!settings) return analysis::fail(std::string(kPartModelErrorPrefix) + settings.message());
+    auto model = load(part, *settings);
+    if (!model) return analysis::fail(std::string(kPartModelErrorPrefix) + model.message());
+    const auto& segmentation = (*model)->segmentation;
     log_.info("part " + std::to_string(part.part_id) + " (" + part.name + "): CAD model " +
-              part.cad_file + " loaded: " + analysis::summary(shape->report()));
-    models_[part.part_id] = model;
-    return std::shared_ptr<const analysis::PartModel>(model);
+              part.cad_file + " ready: " + std::to_string((*model)->face_count) + " faces, " +
+              std::to_string(segmentation.flanges.size()) + " flanges, " +
+              std::to_string(segmentation.bends.size()) + " bends");
+    models_[part.part_id] = *model;
+    return *model;
   }
 
  private:
+  analysis::Expected<std::shared_ptr<const analysis::PartModel>> load(
+      const PartEntry& part, const analysis::CadModelSettings& settings) {
+    if (cache_dir_.empty()) {
+      auto model = analysis::load_part_model(part.cad_file, settings);
+      if (!model) return analysis::fail(model.message());
+      return std::make_shared<const analysis::PartModel>(std::move(*model));
+    }
+    auto loaded = analysis::load_part_model_cached(part.cad_file, cache_dir_, settings);
+    if (!loaded) return analysis::fail(loaded.message());
+    if (!loaded->cache_error.empty())
+      log_.warning("model cache: " + loaded->cache_error + " (the model itself is fine)");
+    log_.info("part " + std::to_string(part.part_id) + ": model cache " +
+              (loaded->cache_hit ? "hit " : "miss, written to ") + loaded->cache_file);
+    return std::make_shared<const analysis::PartModel>(std::move(loaded->model));
+  }
+
   Log& log_;
+  std::string cache_dir_;
   std::map<std::uint16_t, PartEntry> parts_;
   std::mutex mutex_;
   std::map<std::uint16_t, std::shared_ptr<const analysis::PartModel>> models_;
@@ -92,8 +103,7 @@ std::unique_ptr<drivers::Scanner> make_scanner(const v1::ScannerConfig& config, 
 
 AnalyzeFn make_analysis(const std::vector<PartEntry>& parts, const std::string& model_cache_dir,
                         Log& log) {
-  (void)model_cache_dir;  // the in-memory cache covers a daemon's lifetime
-  auto models = std::make_shared<PartModels>(parts, log);
+  auto models = std::make_shared<PartModels>(parts, model_cache_dir, log);
   return [models](std::uint16_t part_id, const analysis::PointCloud& scan)
              -> analysis::Expected<analysis::InspectionOutcome> {
     const PartEntry* part = models->entry(part_id);

@@ -20,6 +20,7 @@ using namespace springscan::analysis;
 
 struct DemoOptions {
   std::string out_dir = "demo";
+  std::string surface_path;  // when set: only write the produced part's dense, noise-free surface
   std::vector<double> springback_deg = {1.5, 0.8, 1.1, 0.4};  // one per bend of the hat
   long points = 60000;
   double noise_mm = 0.02;
@@ -38,9 +39,11 @@ std::vector<double> parse_list(const std::string& text) {
   return values;
 }
 
-// The demo hat profile: 25 mm brims, 30 mm walls, a 40 mm top, 90 degree bends of R4, 80 mm wide.
+// The demo hat profile: 25 mm brims, 30 mm walls, a 40 mm top, 60 degree bends of R4, 80 mm
+// wide. Sloped walls (not 90 degrees) so that a laser line looking along the sheet normal sees
+// every flange, as on a real station that scans a press part from above.
 ProfileSpec demo_profile() {
-  ProfileSpec spec = hat_profile(25.0, 30.0, 40.0, 90.0, 4.0);
+  ProfileSpec spec = hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
   spec.width_mm = 80.0;
   return spec;
 }
@@ -55,7 +58,26 @@ Transform demo_pose() {
   return T;
 }
 
+// The part as produced, densely and without noise: the surface the simulated scanner measures
+// (springscan-scanner-sim --part FILE) in the station demo.
+int write_surface(const DemoOptions& options) {
+  ScanSimulationSettings dense;
+  dense.point_count = 400000;
+  dense.noise_sigma_mm = 0.0;
+  auto surface = simulate_scan(demo_profile(), options.springback_deg, dense);
+  if (!surface) {
+    std::cerr << "springscan-demo-part: " << surface.message() << '\n';
+    return 1;
+  }
+  if (auto written = write_point_cloud(options.surface_path, *surface); !written) {
+    std::cerr << "springscan-demo-part: " << written.message() << '\n';
+    return 1;
+  }
+  return 0;
+}
+
 int run(const DemoOptions& options) {
+  if (!options.surface_path.empty()) return write_surface(options);
   const ProfileSpec spec = demo_profile();
   const std::string cad_path = options.out_dir + "/hat-profile.step";
   if (auto written = write_profile_cad(spec, cad_path); !written) {
@@ -93,7 +115,9 @@ int main(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     const bool has_value = i + 1 < argc;
-    if (arg == "--out" && has_value) {
+    if (arg == "--surface" && has_value) {
+      options.surface_path = argv[++i];
+    } else if (arg == "--out" && has_value) {
       options.out_dir = argv[++i];
     } else if (arg == "--springback" && has_value) {
       options.springback_deg = parse_list(argv[++i]);
@@ -108,8 +132,8 @@ int main(int argc, char** argv) {
         return 2;
       }
     } else {
-      std::cerr << "usage: springscan-demo-part [--out DIR] [--springback S1,S2,S3,S4] "
-                   "[--points N]\n";
+      std::cerr << "usage: springscan-demo-part [--out DIR | --surface FILE] "
+                   "[--springback S1,S2,S3,S4] [--points N]\n";
       return 2;
     }
   }
