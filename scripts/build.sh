@@ -12,7 +12,9 @@ case "$kind" in
                    -DSPRINGSCAN_BUILD_BENCHMARKS=OFF) ;;
   *) echo "usage: scripts/build.sh [release|sanitize]" >&2; exit 2 ;;
 esac
-if [[ "${CI:-}" == true ]]; then flags+=(-DSPRINGSCAN_WERROR=ON); fi
+# CI gates warnings on the Release build. Not on the sanitizer build: g++ 12 reports false
+# -Wmaybe-uninitialized inside libstdc++ (std::regex, std::function) under -fsanitize=address.
+if [[ "${CI:-}" == true && "$kind" == release ]]; then flags+=(-DSPRINGSCAN_WERROR=ON); fi
 launcher=()
 if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
 if [[ ! -f "$dir/CMakeCache.txt" ]]; then
