@@ -9,5 +9,6 @@ kind=${1:-release}
 "$root/scripts/build.sh" "$kind"
 dir="$root/build"; [[ "$kind" == sanitize ]] && dir="$root/build-asan"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)" --timeout 600
