@@ -109,7 +109,10 @@ ArgParser::Outcome ArgParser::parse(int argc, char** argv, int first) {
 
 std::string ArgParser::help() const {
   std::ostringstream out;
-  out << "usage: springscan " << command_ << ' ' << usage_ << "\n\n" << description_ << "\n\n";
+  // Commands give either the whole usage line or only what follows their name.
+  const bool whole_line = usage_.rfind("springscan ", 0) == 0;
+  out << "usage: " << (whole_line ? "" : "springscan " + command_ + ' ') << usage_ << "\n\n"
+      << description_ << "\n\n";
   out << "options:\n";
   for (const auto& name : order_) {
     const Spec& spec = specs_.at(name);
@@ -152,6 +155,16 @@ bool ArgParser::configure_logger(Logger& logger) {
   }
   if (has("quiet")) logger.set_level(LogLevel::kError);
   return true;
+}
+
+std::optional<int> ArgParser::start(int argc, char** argv, Logger& logger) {
+  switch (parse(argc, argv, 2)) {
+    case Outcome::kHelpShown: return kExitOk;
+    case Outcome::kUsageError: return fail_with(command_, error_, kExitUsage);
+    case Outcome::kRun: break;
+  }
+  if (!configure_logger(logger)) return fail_with(command_, error_, kExitUsage);
+  return std::nullopt;
 }
 
 int fail_with(const std::string& command, const std::string& message, int code) {

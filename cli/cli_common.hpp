@@ -64,6 +64,11 @@ class ArgParser {
   /// Applies --quiet and --log-level to the logger.
   bool configure_logger(Logger& logger);
 
+  /// parse() from argv[2] plus configure_logger(): the opening of every subcommand. Returns the
+  /// exit code to return at once (--help shown, or a usage error already printed), or nothing
+  /// when the command should run.
+  std::optional<int> start(int argc, char** argv, Logger& logger);
+
  private:
   struct Spec {
     std::string value_name;  // empty for a switch

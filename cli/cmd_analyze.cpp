@@ -111,12 +111,7 @@ int analyze_main(int argc, char** argv) {
   args.add_option("tolerance", "MM", "surface tolerance (deviation and verdict)");
   args.add_option("angle-tolerance", "DEG", "springback tolerance per bend (verdict)");
   Logger log;
-  switch (args.parse(argc, argv, 2)) {
-    case ArgParser::Outcome::kHelpShown: return kExitOk;
-    case ArgParser::Outcome::kUsageError: return fail_with(kName, args.error(), kExitUsage);
-    case ArgParser::Outcome::kRun: break;
-  }
-  if (!args.configure_logger(log)) return fail_with(kName, args.error(), kExitUsage);
+  if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   for (const char* required : {"scan", "out"})
     if (!args.has(required))
       return fail_with(kName, std::string("--") + required + " is required", kExitUsage);

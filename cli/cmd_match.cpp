@@ -88,12 +88,7 @@ int match_main(int argc, char** argv) {
                   "k-center reduction of both clouds with radius w first (paper: 10 mm); "
                   "indices still refer to the files");
   Logger log;
-  switch (args.parse(argc, argv, 2)) {
-    case ArgParser::Outcome::kHelpShown: return kExitOk;
-    case ArgParser::Outcome::kUsageError: return fail_with(kName, args.error(), kExitUsage);
-    case ArgParser::Outcome::kRun: break;
-  }
-  if (!args.configure_logger(log)) return fail_with(kName, args.error(), kExitUsage);
+  if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   for (const char* required : {"model", "scan", "out"}) {
     if (!args.has(required)) {
       return fail_with(kName, std::string("--") + required + " is required", kExitUsage);

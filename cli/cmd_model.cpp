@@ -108,12 +108,7 @@ int model_main(int argc, char** argv) {
   args.add_switch("json", "print JSON instead of text");
   args.add_option("linear-deflection", "MM", "tessellation chord tolerance (default 0.05)");
   Logger log;
-  switch (args.parse(argc, argv, 2)) {
-    case ArgParser::Outcome::kHelpShown: return kExitOk;
-    case ArgParser::Outcome::kUsageError: return fail_with(kName, args.error(), kExitUsage);
-    case ArgParser::Outcome::kRun: break;
-  }
-  if (!args.configure_logger(log)) return fail_with(kName, args.error(), kExitUsage);
+  if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   if (args.positionals().size() != 1) return fail_with(kName, "expected one CAD file", kExitUsage);
   analysis::CadImportSettings settings;
   if (args.has("linear-deflection")) {

@@ -76,12 +76,7 @@ int scan_main(int argc, char** argv) {
   args.add_option("serial", "TEXT", "USB serial number; default: the first match");
   args.add_option("timeout", "S", "longest silence between data frames (default 2)");
   Logger log;
-  switch (args.parse(argc, argv, 2)) {
-    case ArgParser::Outcome::kHelpShown: return kExitOk;
-    case ArgParser::Outcome::kUsageError: return fail_with(kName, args.error(), kExitUsage);
-    case ArgParser::Outcome::kRun: break;
-  }
-  if (!args.configure_logger(log)) return fail_with(kName, args.error(), kExitUsage);
+  if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   if (!args.has("out")) return fail_with(kName, "--out is required", kExitUsage);
   v1::ScannerConfig config;
   if (args.has("config")) {
