@@ -1,6 +1,7 @@
 #include "drivers/device_link.hpp"
 
 #include <algorithm>
+#include <chrono>
 
 namespace springscan::drivers {
 namespace {
@@ -72,7 +73,7 @@ analysis::Error DeviceLink::transport_error(UsbError error, const std::string& d
   return fail(message + " (" + transport_->detail() + ")");
 }
 
-analysis::Expected<FrameView> DeviceLink::next_frame(int timeout_ms) {
+analysis::Expected<FrameView> DeviceLink::next_frame(int timeout_ms, bool count_timeout) {
   FrameView frame;
   last_usb_error_ = UsbError::kOk;
   for (;;) {
@@ -93,6 +94,10 @@ analysis::Expected<FrameView> DeviceLink::next_frame(int timeout_ms) {
     if (e == UsbError::kOk) {
       decoder_.feed(rx_);
       continue;
+    }
+    if (e == UsbError::kTimeout && !count_timeout) {
+      last_usb_error_ = e;
+      return fail(who() + ": no frame within " + std::to_string(timeout_ms) + " ms");
     }
     if (e == UsbError::kTimeout && ++consecutive_timeouts_ >= settings_.max_consecutive_timeouts) {
       consecutive_timeouts_ = 0;
@@ -141,6 +146,30 @@ analysis::Expected<DeviceStatus> DeviceLink::status() {
   return decode_status(reply->payload);
 }
 
+analysis::Expected<FrameView> DeviceLink::next_scan_frame(const ScanProgress& progress,
+                                                         double done) {
+  using Clock = std::chrono::steady_clock;
+  const auto deadline = Clock::now() + std::chrono::milliseconds(settings_.data_timeout_ms);
+  const long slice_ms = std::max(1, settings_.cancel_poll_ms);
+  for (;;) {
+    const long left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+    if (left <= 0) {
+      // The whole silence counts once towards a device reset, as an unsliced wait would.
+      last_usb_error_ = UsbError::kTimeout;
+      if (++consecutive_timeouts_ >= settings_.max_consecutive_timeouts) {
+        consecutive_timeouts_ = 0;
+        transport_->reset();
+      }
+      return fail(who() + ": timeout while waiting " + std::to_string(settings_.data_timeout_ms) +
+                  " ms for a frame");
+    }
+    auto frame = next_frame(static_cast<int>(std::min(left, slice_ms)), false);
+    if (frame || last_usb_error_ != UsbError::kTimeout) return frame;
+    if (progress && !progress(done)) return fail(who() + ": scan cancelled while waiting for data");
+  }
+}
+
 void DeviceLink::resync() {
   // §7: tell the device to stop, then drain whatever is still coming until it is quiet.
   if (!online()) return;
@@ -180,7 +209,10 @@ analysis::Expected<ScanOutcome> DeviceLink::scan(p::MessageType data_type,
     return error;
   };
   for (;;) {
-    auto frame = next_frame(settings_.data_timeout_ms);
+    const double so_far = outcome.started.expected_frames == 0
+                              ? 0.0
+                              : double(outcome.frames_received) / outcome.started.expected_frames;
+    auto frame = next_scan_frame(progress, std::min(so_far, 1.0));
     const std::string at = " at frame " + std::to_string(outcome.frames_received) + " of " +
                            std::to_string(outcome.started.expected_frames);
     if (!frame) return abort(fail(frame.message() + at + "; scan aborted, no partial result"));

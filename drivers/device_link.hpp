@@ -27,6 +27,9 @@ struct LinkSettings {
   int data_timeout_ms = 2000;        ///< longest silence between two data frames in a scan
   int resync_quiet_ms = 200;         ///< after a failure, drain until the stream is quiet this long
   int max_consecutive_timeouts = 3;  ///< then libusb_reset_device (notes §3)
+  /// During a scan the progress callback is asked at least this often, also while no frame
+  /// arrives, so a cancel (daemon shutdown) ends a scan stuck on a silent device promptly.
+  int cancel_poll_ms = 100;
 };
 
 /// What a scan delivered besides the points.
@@ -68,7 +71,12 @@ class DeviceLink {
   const DecoderStats& decoder_stats() const { return decoder_.stats(); }
 
  private:
-  analysis::Expected<FrameView> next_frame(int timeout_ms);
+  /// `count_timeout`: a timeout counts towards max_consecutive_timeouts (false for the slices
+  /// of a longer wait).
+  analysis::Expected<FrameView> next_frame(int timeout_ms, bool count_timeout = true);
+  /// The next frame of a running scan: waits up to data_timeout_ms in cancel_poll_ms slices,
+  /// asking `progress(done)` between them.
+  analysis::Expected<FrameView> next_scan_frame(const ScanProgress& progress, double done);
   analysis::Expected<FrameView> request(protocol::MessageType command, ByteSpan payload,
                                         protocol::MessageType reply);
   std::optional<analysis::Error> send(protocol::MessageType command, ByteSpan payload);

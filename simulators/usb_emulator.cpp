@@ -35,8 +35,13 @@ gboolean on_handle_ioctl(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpoint
   return TRUE;
 }
 
-void on_client_vanished(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpointer self) {
-  static_cast<EmulatedUsbScanner::Impl*>(self)->forget_client(client);
+// Clients are tracked from "client-connected" (with a reference) until their stream is seen
+// closed: see Impl::sweep_closed_clients_locked.
+void on_client_connected(UMockdevIoctlBase*, UMockdevIoctlClient* client, gpointer self) {
+  auto* impl = static_cast<EmulatedUsbScanner::Impl*>(self);
+  g_object_ref(client);  // released when the client is forgotten
+  std::lock_guard lock(impl->mutex);
+  impl->open_clients.insert(client);
 }
 
 }  // namespace
@@ -105,7 +110,8 @@ analysis::Expected<std::unique_ptr<EmulatedUsbScanner>> EmulatedUsbScanner::crea
   impl->testbed = umockdev_testbed_new();  // sets UMOCKDEV_DIR for this process
   impl->handler = umockdev_ioctl_base_new();
   g_signal_connect(impl->handler, "handle-ioctl", G_CALLBACK(on_handle_ioctl), impl.get());
-  g_signal_connect(impl->handler, "client-vanished", G_CALLBACK(on_client_vanished), impl.get());
+  g_signal_connect(impl->handler, "client-connected", G_CALLBACK(on_client_connected),
+                   impl.get());
   GError* error = nullptr;
   // The handler goes on first, so the node answers as soon as the device appears.
   if (!umockdev_testbed_attach_ioctl(impl->testbed, impl->dev_node.c_str(), impl->handler,
@@ -127,6 +133,12 @@ EmulatedUsbScanner::~EmulatedUsbScanner() {
   for (auto& t : impl_->hotplug_threads) t.join();
   umockdev_testbed_detach_ioctl(impl_->testbed, impl_->dev_node.c_str(), nullptr);
   g_signal_handlers_disconnect_by_data(impl_->handler, impl_.get());
+  std::set<UMockdevIoctlClient*> open;
+  {
+    std::lock_guard lock(impl_->mutex);
+    open.swap(impl_->open_clients);
+  }
+  for (UMockdevIoctlClient* client : open) g_object_unref(client);
   g_object_unref(impl_->handler);
   g_object_unref(impl_->testbed);
 }

@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <set>
 #include <string>
 #include <thread>
 #include <vector>
@@ -50,6 +51,7 @@ struct EmulatedUsbScanner::Impl {
   bool in_halted = false;
   int generation = 0;                              // increments per plug
   std::map<UMockdevIoctlClient*, int> clients;     // the generation each client opened
+  std::set<UMockdevIoctlClient*> open_clients;     // connected, each holding a reference
   std::deque<Urb> pending_in;                      // bulk IN URBs waiting for data
   std::deque<Urb> done;                            // completed, waiting to be reaped
   EmulatorStats stats;
@@ -61,9 +63,15 @@ struct EmulatedUsbScanner::Impl {
   void disconnect_locked();
   /// True when `client` opened the device node of the device that is plugged in now.
   bool live_locked(UMockdevIoctlClient* client);
-  /// Answers one usbfs ioctl (usb_ioctl.cpp).
+  /// Answers one usbfs ioctl (usb_ioctl.cpp), after forgetting the closed clients.
   void handle_ioctl(UMockdevIoctlClient* client);
-  void forget_client(UMockdevIoctlClient* client);
+  void handle_ioctl_locked(UMockdevIoctlClient* client);
+  /// umockdev 0.17 declares "client-vanished" but never emits it (and its "connected"
+  /// property is never notified): a client whose process closed the device node or died
+  /// (kill -9) only shows as a closed stream. Such clients are dropped here, with their queued
+  /// URBs, which would otherwise sit at the head of the queue and swallow the data meant for
+  /// the next process that opens the device. Returns them for the caller to unref unlocked.
+  std::vector<UMockdevIoctlClient*> sweep_closed_clients_locked();
   /// Standard GET_DESCRIPTOR answers on endpoint 0 (strings carry the identity).
   std::vector<std::uint8_t> control_reply(const std::uint8_t setup[8]) const;
   std::vector<std::uint8_t> descriptors() const;

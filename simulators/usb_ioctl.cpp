@@ -30,11 +30,18 @@ bool EmulatedUsbScanner::Impl::live_locked(UMockdevIoctlClient* client) {
   return plugged && it->second == generation;
 }
 
-void EmulatedUsbScanner::Impl::forget_client(UMockdevIoctlClient* client) {
-  std::lock_guard lock(mutex);
-  clients.erase(client);
-  std::erase_if(pending_in, [client](const Urb& u) { return u.client == client; });
-  std::erase_if(done, [client](const Urb& u) { return u.client == client; });
+std::vector<UMockdevIoctlClient*> EmulatedUsbScanner::Impl::sweep_closed_clients_locked() {
+  std::vector<UMockdevIoctlClient*> closed;
+  for (UMockdevIoctlClient* client : open_clients) {
+    if (!umockdev_ioctl_client_get_connected(client)) closed.push_back(client);
+  }
+  for (UMockdevIoctlClient* client : closed) {
+    open_clients.erase(client);
+    clients.erase(client);
+    std::erase_if(pending_in, [client](const Urb& u) { return u.client == client; });
+    std::erase_if(done, [client](const Urb& u) { return u.client == client; });
+  }
+  return closed;
 }
 
 void EmulatedUsbScanner::Impl::fill_locked() {
@@ -89,9 +96,18 @@ void EmulatedUsbScanner::Impl::disconnect_locked() {
 }
 
 void EmulatedUsbScanner::Impl::handle_ioctl(UMockdevIoctlClient* client) {
+  std::vector<UMockdevIoctlClient*> closed;
+  {
+    std::lock_guard lock(mutex);
+    closed = sweep_closed_clients_locked();
+    handle_ioctl_locked(client);
+  }
+  for (UMockdevIoctlClient* c : closed) g_object_unref(c);  // outside the lock: may finalize
+}
+
+void EmulatedUsbScanner::Impl::handle_ioctl_locked(UMockdevIoctlClient* client) {
   const gulong request = umockdev_ioctl_client_get_request(client);
   UMockdevIoctlData* arg = umockdev_ioctl_client_get_arg(client);
-  std::lock_guard lock(mutex);
   const bool live = live_locked(client);
   switch (request) {
     case USBDEVFS_SUBMITURB: {

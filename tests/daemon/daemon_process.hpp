@@ -12,8 +12,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -35,13 +38,19 @@ class DaemonProcess {
     if (::bind(notify_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0) {
       throw std::runtime_error("cannot bind " + notify_path_);
     }
+    // This environment, with NOTIFY_SOCKET and `extra_env` replacing same-named entries
+    // (getenv returns the first match, so appending would not override).
+    std::vector<std::string> added = extra_env;
+    added.push_back("NOTIFY_SOCKET=" + notify_path_);
+    const auto name_of = [](const std::string& entry) { return entry.substr(0, entry.find('=')); };
     std::vector<std::string> env_strings;
     for (char** e = environ; *e != nullptr; ++e) {
       const std::string entry = *e;
-      if (entry.rfind("NOTIFY_SOCKET=", 0) != 0) env_strings.push_back(entry);
+      bool replaced = false;
+      for (const auto& a : added) replaced = replaced || name_of(a) == name_of(entry);
+      if (!replaced) env_strings.push_back(entry);
     }
-    env_strings.push_back("NOTIFY_SOCKET=" + notify_path_);
-    for (const auto& e : extra_env) env_strings.push_back(e);
+    for (const auto& e : added) env_strings.push_back(e);
     std::vector<char*> envp;
     for (auto& e : env_strings) envp.push_back(e.data());
     envp.push_back(nullptr);
@@ -50,10 +59,18 @@ class DaemonProcess {
     if (posix_spawn(&pid_, exe.c_str(), nullptr, nullptr, argv, envp.data()) != 0) {
       throw std::runtime_error("cannot start " + exe);
     }
-    wait_ready(ready_timeout_s);
+    try {
+      wait_ready(ready_timeout_s);
+    } catch (...) {
+      ::close(notify_fd_);
+      throw;
+    }
+    drain_ = std::thread([this] { drain_notifications(); });
   }
   ~DaemonProcess() {
     if (pid_ > 0) stop(SIGTERM);
+    stop_drain_ = true;
+    drain_.join();
     ::close(notify_fd_);
     ::unlink(notify_path_.c_str());
   }
@@ -61,6 +78,11 @@ class DaemonProcess {
   DaemonProcess& operator=(const DaemonProcess&) = delete;
 
   int port() const { return port_; }
+  /// True once the daemon sent a notification containing `text` after READY=1.
+  bool notified(const std::string& text) {
+    std::lock_guard lock(mutex_);
+    return notes_.find(text) != std::string::npos;
+  }
   pid_t pid() const { return pid_; }
   /// Sends `signal` and reaps the child; returns its wait status.
   /// A child that has not exited 10 s after `signal` is killed (SIGKILL), as systemd does
@@ -108,10 +130,26 @@ class DaemonProcess {
     throw std::runtime_error("springscand did not send READY=1 in time");
   }
 
+  void drain_notifications() {
+    while (!stop_drain_) {
+      char buffer[4096];
+      const ssize_t n = ::recv(notify_fd_, buffer, sizeof buffer, 0);  // SO_RCVTIMEO 200 ms
+      if (n > 0) {
+        std::lock_guard lock(mutex_);
+        notes_.append(buffer, static_cast<std::size_t>(n)).push_back('\n');
+        if (notes_.size() > 65536) notes_.erase(0, notes_.size() - 65536);
+      }
+    }
+  }
+
   std::string notify_path_;
   int notify_fd_ = -1;
   pid_t pid_ = -1;
   int port_ = 0;
+  std::thread drain_;
+  std::atomic<bool> stop_drain_{false};
+  std::mutex mutex_;
+  std::string notes_;  // the notifications after READY=1 (the last 64 KiB)
 };
 
 }  // namespace springscan::daemon::testing

@@ -1,225 +1,219 @@
-// Hardware-in-the-loop: the real springscand process, the scanner simulator presented as a USB
-// device through umockdev (the daemon runs with the umockdev preload, so its production libusb
-// path talks to the emulated device), the real analysis pipeline on the part's CAD file, and
-// the simulated PLC (plus mbpoll) over loopback TCP.
-#include <gtest/gtest.h>
+// Hardware in the loop, the normal cycle and the Modbus side (hil_rig.hpp): the real springscand
+// process, the production libusb driver against the emulated scanner, the real analysis on the
+// demo part's CAD file, the simulated PLC and Debian's mbpoll over loopback TCP.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
-#include <csignal>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <memory>
+#include <chrono>
+#include <thread>
 
-#include "analysis/cad_profile.hpp"
-#include "analysis/sheet_part.hpp"
-#include "daemon_process.hpp"
-#include "simulators/plc_client.hpp"
-#include "simulators/usb_emulator.hpp"
-#include "test_rig.hpp"
+#include "hil_rig.hpp"
 
 namespace springscan::daemon {
 namespace {
 
-namespace fs = std::filesystem;
-using simulators::EmulatedUsbScanner;
-using simulators::PlcClient;
-using testing::DaemonProcess;
-using testing::TempDir;
+using testing::HilTest;
 
-const analysis::ProfileSpec& nominal() {
-  static const analysis::ProfileSpec spec = analysis::l_profile(60, 25, 90, 3);
-  return spec;
+/// mbpoll against the daemon: `options` are mbpoll's (0-based addresses with -0, one poll);
+/// `values`, when given, are written instead of read.
+std::pair<int, std::string> mbpoll(int port, const std::string& options,
+                                   const std::string& values = "") {
+  return testing::run_command("mbpoll -m tcp -a 1 -0 -1 -p " + std::to_string(port) + " " +
+                              options + " 127.0.0.1 " + values);
 }
 
-/// A dense, noise-free surface of the part as produced with `springback_deg` at its bend.
-analysis::PointCloud surface(double springback_deg) {
-  analysis::ScanSimulationSettings dense;
-  dense.point_count = 60000;
-  dense.noise_sigma_mm = 0.0;
-  return *analysis::simulate_scan(nominal(), {springback_deg}, dense);
+/// mbpoll writes `values` from `first` in table `type` (0 coils, 4 holding registers).
+void mbpoll_write(int port, int type, int first, const std::string& values) {
+  const auto [status, output] = mbpoll(port, "-t " + std::to_string(type) + " -r " +
+                                                 std::to_string(first), values);
+  ASSERT_EQ(status, 0) << output;
 }
 
-simulators::ScannerDeviceSettings device() {
-  simulators::ScannerDeviceSettings s;
-  s.noise.sigma_mm = 0.02;
-  s.laser.step_mm = 2.0;
-  s.laser.points_per_profile = 128;
-  return s;
+/// mbpoll polls the discrete inputs until `bit` reads `value`, writing PLC_HEARTBEAT each
+/// time as a PLC does (the daemon watches it). False after `timeout_s`.
+bool mbpoll_wait_bit(int port, int bit, bool value, int& heartbeat, double timeout_s = 180.0) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<
+      std::chrono::steady_clock::duration>(std::chrono::duration<double>(timeout_s));
+  while (std::chrono::steady_clock::now() < deadline) {
+    mbpoll(port, "-t 4 -r 3", std::to_string(++heartbeat));
+    const auto [status, output] = mbpoll(port, "-t 1 -r 0 -c 10");
+    const auto bits = testing::mbpoll_values(output);
+    if (status == 0 && bits.count(bit) != 0 && (bits.at(bit) != 0) == value) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));  // a PLC's poll period
+  }
+  return false;
 }
 
-class HilTest : public ::testing::Test {
- protected:
-  HilTest() : dir_("springscan-hil") {
-    // The emulator answers the child's ioctls over a socket; a child that dies (kill -9)
-    // must not take the test process down with SIGPIPE.
-    std::signal(SIGPIPE, SIG_IGN);
-    const std::string cad = dir_.str() + "/l-bracket.step";
-    if (!analysis::write_profile_cad(nominal(), cad).ok()) throw std::runtime_error("CAD");
-    std::ofstream(config_path()) << "modbus { bind_address: \"127.0.0.1\" port: 0\n"
-                                    "  allowed_clients: \"127.0.0.1\" }\n"
-                                    "scanner { kind: LASER_LINE timeout_s: 1 }\n"
-                                    "parts { part_id: 1 name: \"L-bracket\" cad_file: \""
-                                 << cad
-                                 << "\" settings { verdict { tolerance_mm: 0.1 } } }\n"
-                                    "report_dir: \"reports\"\nlog_level: \"warning\"\n";
-  }
-  std::string config_path() const { return dir_.str() + "/station.textproto"; }
-  /// The verdict part of record `record`'s report.json, for failure messages.
-  std::string report_text(int record) const {
-    char name[32];
-    std::snprintf(name, sizeof name, "/r%012d/report.json", record);
-    std::ifstream json(reports() + name);
-    const std::string text((std::istreambuf_iterator<char>(json)), {});
-    const auto at = text.find("\"verdict\"");
-    return at == std::string::npos ? text.substr(0, 2000) : text.substr(at, 1500);
-  }
-  std::string reports() const { return dir_.str() + "/reports"; }
-
-  void emulate(double springback_deg) {
-    auto emulator = EmulatedUsbScanner::create(device(), surface(springback_deg));
-    ASSERT_TRUE(emulator.ok()) << emulator.message();
-    emulator_ = std::move(*emulator);
-  }
-  std::unique_ptr<DaemonProcess> start_daemon() const {
-    return std::make_unique<DaemonProcess>(
-        SPRINGSCAND_EXE, config_path(), dir_.str(),
-        std::vector<std::string>{"LD_PRELOAD=" + simulators::umockdev_preload_library(),
-                                 "UMOCKDEV_DIR=" + emulator_->root_dir()});
-  }
-  /// RESULT_CODE must say what the stored report's verdict says (OK iff verdict.pass).
-  void expect_code_matches_report(regs::ResultCode code, int record) const {
-    char name[32];
-    std::snprintf(name, sizeof name, "/r%012d/report.pb", record);
-    std::ifstream in(reports() + name, std::ios::binary);
-    v1::InspectionReport report;
-    ASSERT_TRUE(report.ParseFromIstream(&in));
-    EXPECT_EQ(code, report.verdict().pass() ? regs::ResultCode::kOk : regs::ResultCode::kFormNok);
-    EXPECT_EQ(report.result_code(), static_cast<std::uint32_t>(code));
-  }
-  static std::unique_ptr<PlcClient> plc(int port) {
-    simulators::PlcClientSettings settings;
-    settings.port = port;
-    settings.step_timeout_s = 120.0;  // the sanitizer build analyses slowly
-    auto client = PlcClient::connect(settings);
-    if (!client) throw std::runtime_error(client.message());
-    return std::move(*client);
-  }
-  static void wait_online(PlcClient& plc) {
-    ASSERT_TRUE(plc.wait_for([](const auto& s) { return s.bit(regs::kDiScannerOnline); },
-                             "SCANNER_ONLINE").ok());
-  }
-
-  TempDir dir_;
-  std::unique_ptr<EmulatedUsbScanner> emulator_;
-};
-
-TEST_F(HilTest, GoodPartMeasuresWithinNoiseAndMbpollReadsTheResultBlock) {
-  emulate(0.0);
+TEST_F(HilTest, GoodPartPassesWithItsSpringbackAndMbpollRunsTheHandshake) {
+  emulate(testing::kGoodSpringback);
   auto daemon = start_daemon();
   auto client = plc(daemon->port());
   wait_online(*client);
-  auto cycle = client->run_cycle(21, 1, false);
+  auto cycle = client->run_cycle(21, 1);
   ASSERT_TRUE(cycle.ok()) << cycle.message();
   ASSERT_TRUE(cycle->accepted);
   EXPECT_EQ(cycle->result.seq, 1);
   EXPECT_EQ(cycle->result.job_id, 21);
-  EXPECT_LT(cycle->result.max_deviation_um, 300) << report_text(1);  // noise 0.02 mm
-  EXPECT_LT(cycle->result.rms_deviation_um, 60);
-  EXPECT_EQ(cycle->result.code, regs::ResultCode::kOk) << report_text(1);
+  EXPECT_EQ(cycle->result.part_id, 1);
+  EXPECT_EQ(cycle->result.code, regs::ResultCode::kOk);
   EXPECT_TRUE(cycle->part_ok);
-  expect_code_matches_report(cycle->result.code, 1);
-  EXPECT_TRUE(fs::exists(reports() + "/r000000000001/report.json"));
-  // A third-party client: Debian's mbpoll, 0-based addresses, FC04, one poll.
-  const std::string command = "mbpoll -m tcp -a 1 -0 -1 -t 3 -r 100 -c 3 -p " +
-                              std::to_string(daemon->port()) + " 127.0.0.1 2>&1";
-  std::FILE* pipe = ::popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char line[256];
-  while (std::fgets(line, sizeof line, pipe) != nullptr) output += line;
-  EXPECT_EQ(::pclose(pipe), 0) << output;
-  EXPECT_NE(output.find("[100]: \t1"), std::string::npos) << output;  // RESULT_SEQ
-  EXPECT_NE(output.find("[102]: \t21"), std::string::npos) << output;  // JOB_ID echo
+  // The deviation in the registers is the report's, in um (springback included, so more
+  // than the 0.02 mm noise).
+  const v1::InspectionReport first = report(1);
+  EXPECT_NEAR(cycle->result.rms_deviation_um, first.deviation().rms() * 1000.0, 1.0);
+  EXPECT_NEAR(cycle->result.max_deviation_um,
+              std::max(-first.deviation().min(), first.deviation().max()) * 1000.0, 1.0);
+  EXPECT_LT(first.deviation().rms(), 0.2);
+  EXPECT_FALSE(cycle->result.vectors_um.empty());
+  EXPECT_TRUE(first.verdict().pass());
+  expect_springback(first, testing::kGoodSpringback, 0.1);
+  expect_registers_match(cycle->result, first);
+
+  // A third-party client runs the next handshake: Debian's mbpoll, one request per call.
+  const int port = daemon->port();
+  int heartbeat = 1000;
+  mbpoll_write(port, 4, regs::kHrJobId, "22 1");      // JOB_ID 22, PART_ID 1 (FC16)
+  mbpoll_write(port, 0, regs::kCoilTriggerEnable, "1 1");  // TRIGGER_ENABLE, TRIGGER (FC15)
+  ASSERT_TRUE(mbpoll_wait_bit(port, regs::kDiTriggerAck, true, heartbeat));
+  mbpoll_write(port, 0, regs::kCoilTrigger, "0");  // TRIGGER drops (FC05)
+  ASSERT_TRUE(mbpoll_wait_bit(port, regs::kDiResultValid, true, heartbeat));
+  const auto [status, output] = mbpoll(port, "-t 3:hex -r 100 -c 44");  // up to bend record 3
+  ASSERT_EQ(status, 0) << output;
+  const auto words = testing::mbpoll_values(output);
+  ASSERT_EQ(words.size(), 44u) << output;
+  EXPECT_EQ(words.at(regs::kIrResultSeq), 2u);
+  EXPECT_EQ(words.at(regs::kIrResultJobId), 22u);
+  EXPECT_EQ(words.at(regs::kIrResultCode), static_cast<unsigned>(regs::ResultCode::kOk));
+  const v1::InspectionReport second = report(2);
+  ASSERT_EQ(words.at(regs::kIrBendCount), static_cast<unsigned>(second.bends_size()));
+  for (int j = 0; j < second.bends_size(); ++j) {  // int32 millidegrees, high word first
+    const int at = regs::kIrBendTable + j * regs::kBendRecordSize + regs::kBendSpringback;
+    const std::uint16_t pair[2] = {static_cast<std::uint16_t>(words.at(at)),
+                                   static_cast<std::uint16_t>(words.at(at + 1))};
+    EXPECT_NEAR(regs::decode_int32(pair, regs::WordOrder::kAbcd),
+                second.bends(j).springback_deg() * 1000.0, 1.0);
+  }
+  expect_springback(second, testing::kGoodSpringback, 0.1);
+  mbpoll_write(port, 0, regs::kCoilResultAck, "1");
+  ASSERT_TRUE(mbpoll_wait_bit(port, regs::kDiResultValid, false, heartbeat));
+  mbpoll_write(port, 0, regs::kCoilResultAck, "0");
+  EXPECT_EQ(record_count(), 2);
 }
 
-TEST_F(HilTest, SpringbackOutOfToleranceShowsInTheResultAndTheReport) {
-  emulate(8.0);  // the 25 mm leg opens by 8 degrees: up to 3.5 mm at its end
+TEST_F(HilTest, SpringbackBeyondToleranceFailsWithTheReasonInTheReport) {
+  const std::vector<double> produced{2.5, 0.3, 0.6, 0.2};  // bend 0 opens 1.5 deg too far
+  emulate(produced);
   auto daemon = start_daemon();
   auto client = plc(daemon->port());
   wait_online(*client);
-  auto cycle = client->run_cycle(1, 1);
+  auto cycle = client->run_cycle(5, 1);
   ASSERT_TRUE(cycle.ok()) << cycle.message();
-  // The verdict itself is the pipeline's (checked by its own tests); here: the registers carry
-  // the measured deviation and a RESULT_CODE that agrees with the stored report.
-  EXPECT_EQ(cycle->part_ok, cycle->result.code == regs::ResultCode::kOk);
-  EXPECT_GT(cycle->result.max_deviation_um, 500) << report_text(1);  // far beyond the noise
-  expect_code_matches_report(cycle->result.code, 1);
+  EXPECT_EQ(cycle->result.code, regs::ResultCode::kFormNok);
+  EXPECT_FALSE(cycle->part_ok);
+  const v1::InspectionReport r = report(1);
+  EXPECT_FALSE(r.verdict().pass());
+  const std::vector<int> index = expect_springback(r, produced, 0.1);
+  ASSERT_EQ(index.size(), 4u);
+  expect_registers_match(cycle->result, r);
+  std::string failed_bend;
+  for (int k = 0; k < r.bends_size(); ++k) {
+    const bool opened_too_far = index[static_cast<std::size_t>(k)] == 0;
+    EXPECT_EQ(r.bends(k).pass(), !opened_too_far) << "report bend " << r.bends(k).id();
+    if (opened_too_far) failed_bend = "bend " + std::to_string(r.bends(k).id()) + " springback";
+  }
+  ASSERT_EQ(r.verdict().reasons_size(), 1) << r.verdict().DebugString();
+  EXPECT_EQ(r.verdict().reasons(0).rfind(failed_bend, 0), 0u) << r.verdict().DebugString();
 }
 
-TEST_F(HilTest, UnplugMidScanIsAFaultWithAStoredReport) {
-  // The device disconnects halfway through the scan (replug and the next cycle are covered
-  // in-process by StationTest: umockdev does not carry a replug over to a child process).
-  emulate(0.0);
-  emulator_->unplug();
-  simulators::DeviceFaults faults;
-  faults.unplug_at_fraction = 0.5;
-  emulator_->set_faults(faults);
-  emulator_->plug();
+/// A raw TCP connection from `source` (127.0.0.0/8 all reaches loopback).
+class RawClient {
+ public:
+  RawClient(int port, const char* source) {
+    fd_ = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    timeval timeout{30, 0};  // the daemon answers or closes; 30 s is only a safety net
+    setsockopt(fd_, SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
+    sockaddr_in local{};
+    local.sin_family = AF_INET;
+    inet_pton(AF_INET, source, &local.sin_addr);
+    if (::bind(fd_, reinterpret_cast<sockaddr*>(&local), sizeof local) != 0)
+      throw std::runtime_error("bind source failed");
+    sockaddr_in addr{};
+    addr.sin_family = AF_INET;
+    addr.sin_port = htons(static_cast<std::uint16_t>(port));
+    inet_pton(AF_INET, "127.0.0.1", &addr.sin_addr);
+    if (::connect(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0)
+      throw std::runtime_error("raw connect failed");
+  }
+  ~RawClient() { ::close(fd_); }
+  RawClient(const RawClient&) = delete;
+  RawClient& operator=(const RawClient&) = delete;
+  void send_bytes(const std::vector<std::uint8_t>& bytes) const {
+    ASSERT_EQ(::send(fd_, bytes.data(), bytes.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(bytes.size()));
+  }
+  /// One reply; empty when the daemon closed the connection.
+  std::vector<std::uint8_t> receive() const {
+    std::vector<std::uint8_t> buffer(300);
+    const ssize_t n = ::recv(fd_, buffer.data(), buffer.size(), 0);
+    buffer.resize(n > 0 ? static_cast<std::size_t>(n) : 0);
+    return buffer;
+  }
+
+ private:
+  int fd_ = -1;
+};
+
+std::vector<std::uint8_t> adu(const std::vector<std::uint8_t>& pdu) {
+  std::vector<std::uint8_t> out = {0x12, 0x34, 0, 0, 0, static_cast<std::uint8_t>(pdu.size() + 1),
+                                   1};
+  for (const std::uint8_t byte : pdu) out.push_back(byte);
+  return out;
+}
+
+TEST_F(HilTest, MalformedFramesAndAForeignClientLeaveTheStationServing) {
+  emulate(testing::kGoodSpringback);
   auto daemon = start_daemon();
   auto client = plc(daemon->port());
   wait_online(*client);
-  auto failed = client->run_cycle(1, 1, false);
-  ASSERT_TRUE(failed.ok()) << failed.message();
-  EXPECT_EQ(failed->result.code, regs::ResultCode::kScanFailed);
-  EXPECT_FALSE(failed->part_ok);
-  EXPECT_EQ(failed->error_code, static_cast<std::uint16_t>(regs::ErrorCode::kScanFailed));
-  auto status = client->read_status();
-  ASSERT_TRUE(status.ok());
-  EXPECT_EQ(status->live[regs::kIrState], static_cast<std::uint16_t>(regs::State::kFault));
-  EXPECT_EQ(status->live[regs::kIrErrorDetail],
-            static_cast<std::uint16_t>(regs::ErrorDetail::kDeviceGone));
-  EXPECT_TRUE(status->bit(regs::kDiError));
-  EXPECT_NE(report_text(1).find("scan failed"), std::string::npos) << report_text(1);
-  daemon->stop(SIGKILL);  // its libusb may be blocked on the vanished emulated device
-}
-
-TEST_F(HilTest, KillDuringAnalysisLeavesNoHalfReportAndHonestRegisters) {
-  emulate(0.0);
-  std::uint16_t first_boot = 0;
-  {
-    auto daemon = start_daemon();
-    auto client = plc(daemon->port());
-    wait_online(*client);
-    first_boot = client->read_status()->live[regs::kIrBootId];
-    auto triggered = client->trigger(1, 1);
-    ASSERT_TRUE(triggered.ok() && triggered->accepted);
-    ASSERT_TRUE(client->wait_for([](const auto& s) {
-                  return s.live[regs::kIrState] == static_cast<int>(regs::State::kAnalyzing) ||
-                         s.bit(regs::kDiResultValid);
-                }, "ANALYZING").ok());
-    daemon->stop(SIGKILL);
+  {  // not on the allow-list (only 127.0.0.1 is): closed at accept, nothing answered
+    RawClient foreign(daemon->port(), "127.0.0.2");
+    foreign.send_bytes(adu({4, 0, 0, 0, 1}));
+    EXPECT_TRUE(foreign.receive().empty());
   }
-  for (const auto& entry : fs::directory_iterator(reports())) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind("r", 0) == 0) {  // a record, if the kill came late, is complete
-      EXPECT_TRUE(fs::exists(entry.path() / "report.pb")) << name;
-      EXPECT_TRUE(fs::exists(entry.path() / "report.json")) << name;
-    }
+  {  // well framed but wrong: exceptions, and the connection stays usable
+    RawClient raw(daemon->port(), "127.0.0.1");
+    raw.send_bytes(adu({4, 0x03, 0xE8, 0, 126}));  // 126 registers: over FC04's limit
+    auto reply = raw.receive();
+    ASSERT_EQ(reply.size(), 9u);
+    EXPECT_EQ(reply[7], 0x84);
+    EXPECT_EQ(reply[8], 3);                       // ILLEGAL DATA VALUE
+    raw.send_bytes(adu({6, 0, regs::kIrResultSeq, 0, 1}));  // write a read-only mirror
+    reply = raw.receive();
+    ASSERT_EQ(reply.size(), 9u);
+    EXPECT_EQ(reply[8], 2);                       // ILLEGAL DATA ADDRESS
+    raw.send_bytes(adu({0x17, 0, 1, 0, 1, 0, 1, 0, 1, 2, 0, 7}));  // FC23 (libmodbus #614)
+    reply = raw.receive();
+    ASSERT_EQ(reply.size(), 9u);
+    EXPECT_EQ(reply[8], 1);                       // ILLEGAL FUNCTION
+    raw.send_bytes(adu({4, 0, 0, 0, 1}));
+    EXPECT_EQ(raw.receive().size(), 11u);
   }
-  auto daemon = start_daemon();
-  auto client = plc(daemon->port());
-  auto status = client->read_status();
-  ASSERT_TRUE(status.ok());
-  EXPECT_NE(status->live[regs::kIrBootId], first_boot);
-  EXPECT_FALSE(status->bit(regs::kDiResultValid));
-  EXPECT_FALSE(status->bit(regs::kDiBusy));
-  for (const auto& entry : fs::directory_iterator(reports())) {
-    EXPECT_NE(entry.path().filename().string().rfind(".tmp-", 0), 0u);  // cleaned at start
+  {  // not Modbus TCP (protocol id 5), and a length of 4096: the connection is closed
+    RawClient raw(daemon->port(), "127.0.0.1");
+    raw.send_bytes({0, 1, 0, 5, 0, 6, 1, 4, 0, 0, 0, 1});
+    EXPECT_TRUE(raw.receive().empty());
+    RawClient huge(daemon->port(), "127.0.0.1");
+    huge.send_bytes({0, 1, 0, 0, 0x10, 0, 1});
+    EXPECT_TRUE(huge.receive().empty());
   }
-  wait_online(*client);
-  auto next = client->run_cycle(2, 1);
-  ASSERT_TRUE(next.ok()) << next.message();
-  EXPECT_EQ(next->result.job_id, 2);
+  // The station kept serving the PLC all along and still inspects.
+  auto cycle = client->run_cycle(3, 1);
+  ASSERT_TRUE(cycle.ok()) << cycle.message();
+  EXPECT_EQ(cycle->result.code, regs::ResultCode::kOk);
+  EXPECT_EQ(cycle->result.seq, 1);
+  EXPECT_EQ(daemon->stop(SIGTERM), 0);  // exits cleanly
 }
 
 }  // namespace
