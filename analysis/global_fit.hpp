@@ -23,7 +23,8 @@ struct GlobalFitSettings {
 struct GlobalFitResult {
   Transform T_cad_scan = Transform::Identity();  ///< maps scan coordinates into the CAD frame
   double rms_initial_mm = 0.0;    ///< rms nearest distance of the scan points as given, the
-                                  ///< farthest icp.trimmed_fraction left out (outliers)
+                                  ///< farthest icp.trimmed_fraction left out (outliers); over
+                                  ///< an evenly strided sample of at most 4096 scan points
   double rms_after_pca_mm = 0.0;  ///< the same after the pure PCA alignment (paper Figure 5)
   double rms_final_mm = 0.0;      ///< the same after ICP
   IcpResult icp;                  ///< history, iterations, inliers, converged, stop reason

@@ -16,16 +16,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kDistinctPoseRad = 5.0 * kPi / 180.0;
 constexpr double kQuarterTurnRad = kPi / 2.0;
 
-// Every `stride`-th point, so that about `count` remain (deterministic, no randomness).
-std::vector<Vec3> strided_sample(const std::vector<Vec3>& points, std::size_t count) {
-  if (count == 0 || points.size() <= count) return points;
-  const std::size_t stride = (points.size() + count - 1) / count;
-  std::vector<Vec3> out;
-  out.reserve(count);
-  for (std::size_t i = 0; i < points.size(); i += stride) out.push_back(points[i]);
-  return out;
-}
-
 // The robust error of a candidate: mean squared nearest distance, the worst share left out.
 double trimmed_score(const std::vector<Vec3>& sample, const Transform& T, const KdTree& target,
                      double trimmed_fraction) {
@@ -40,16 +30,15 @@ double trimmed_score(const std::vector<Vec3>& sample, const Transform& T, const 
   return sum / static_cast<double>(std::min(keep, d2.size()));
 }
 
-// Refines candidates with a short ICP on the sample and scores them, in parallel.
+// Refines candidates with a short ICP on a sample and scores them, in parallel.
 struct Refiner {
-  std::vector<Vec3> sample;
   const KdTree& target;
   const std::vector<Vec3>& normals;
   const PcaAlignSettings& settings;
   IcpSettings icp_settings;
 
-  void run(const std::vector<std::size_t>& which, int iterations, std::vector<Transform>& poses,
-           std::vector<double>& scores) {
+  void run(const std::vector<Vec3>& sample, const std::vector<std::size_t>& which,
+           int iterations, std::vector<Transform>& poses, std::vector<double>& scores) {
     IcpSettings s = icp_settings;
     s.max_iterations = iterations;
     parallel_tasks(which.size(), settings.threads, [&](std::size_t k) {
@@ -75,6 +64,50 @@ void pick_best(const std::vector<Transform>& poses, PcaAlignResult& result) {
     if (apart > kDistinctPoseRad) second = std::min(second, scores[i]);
   }
   result.ambiguity = second > 0.0 ? scores[result.best_candidate] / second : 1.0;
+}
+
+// The 1st and 99th percentile of the points' coordinates along each of the frame's axes
+// (a robust box: a few outliers must not make a partial scan look complete).
+std::pair<Vec3, Vec3> extent_along(const std::vector<Vec3>& points, const Mat3& axes,
+                                   const Mat3& rotation = Mat3::Identity()) {
+  const Mat3 project = axes.transpose() * rotation;
+  Vec3 lo, hi;
+  std::vector<double> along(points.size());
+  const auto low_rank = static_cast<std::ptrdiff_t>(0.01 * static_cast<double>(points.size()));
+  const auto high_rank = static_cast<std::ptrdiff_t>(points.size()) - 1 - low_rank;
+  for (int k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < points.size(); ++i) along[i] = project.row(k).dot(points[i]);
+    std::nth_element(along.begin(), along.begin() + low_rank, along.end());
+    lo(k) = along[static_cast<std::size_t>(low_rank)];
+    std::nth_element(along.begin(), along.begin() + high_rank, along.end());
+    hi(k) = along[static_cast<std::size_t>(high_rank)];
+  }
+  return {lo, hi};
+}
+
+// Where to put the rotated source (start = R * p + t). The centroids aligned (paper §3); and
+// where the rotated sample is clearly shorter than the target along a target axis (the scan
+// covers part of the part), also pushed against the low and the high end of the target's box.
+std::vector<Vec3> translation_hypotheses(const std::vector<Vec3>& sample, const Mat3& R,
+                                         const PrincipalFrame& source, const PrincipalFrame& target,
+                                         const std::pair<Vec3, Vec3>& target_box,
+                                         double slack_fraction) {
+  const auto [lo, hi] = extent_along(sample, target.axes, R);
+  const Vec3 centred = target.axes.transpose() * (target.centroid - R * source.centroid);
+  std::vector<Vec3> offsets{centred};  // in target axes coordinates
+  for (int k = 0; k < 3; ++k) {
+    const double model_extent = target_box.second(k) - target_box.first(k);
+    if (model_extent - (hi(k) - lo(k)) <= slack_fraction * model_extent) continue;
+    const std::size_t before = offsets.size();
+    for (std::size_t i = 0; i < before; ++i)
+      for (double along : {target_box.first(k) - lo(k), target_box.second(k) - hi(k)}) {
+        Vec3 o = offsets[i];
+        o(k) = along;
+        offsets.push_back(o);
+      }
+  }
+  for (auto& o : offsets) o = target.axes * o;
+  return offsets;
 }
 
 }  // namespace
@@ -135,8 +168,9 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   auto target_frame = principal_frame(target.points());
   if (!target_frame) return fail("model " + target_frame.message());
   const auto rotations = pca_rotation_candidates(*source_frame, *target_frame, settings.in_plane_steps);
-  Refiner refiner{strided_sample(source, settings.sample_points), target, target_normals, settings,
-                  {}};
+  const std::vector<Vec3> sample = strided_sample(source, settings.sample_points);
+  const std::vector<Vec3> screen_sample = strided_sample(source, settings.screen_sample_points);
+  Refiner refiner{target, target_normals, settings, {}};
   refiner.icp_settings.method = target_normals.size() == target.size()
                                     ? IcpMethod::kPointToPlane
                                     : IcpMethod::kPointToPoint;
@@ -144,25 +178,33 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   refiner.icp_settings.kernel = RobustKernel::kNone;
   refiner.icp_settings.error_ratio_stop = 1.0;  // a short fixed budget: run all iterations
   refiner.icp_settings.threads = 1;             // parallel over candidates instead
+  const auto target_box = extent_along(target.points(), target_frame->axes);
+  std::vector<Transform> starts;
+  for (const Mat3& R : rotations)
+    for (const Vec3& t : translation_hypotheses(sample, R, *source_frame, *target_frame,
+                                                target_box, settings.partial_slack_fraction)) {
+      Transform start = Transform::Identity();
+      start.linear() = R;
+      start.translation() = t;
+      starts.push_back(start);
+    }
   PcaAlignResult result;
-  std::vector<Transform> starts(rotations.size(), Transform::Identity());
-  for (std::size_t i = 0; i < rotations.size(); ++i) {
-    // Rotate about the source centroid, then move it onto the target centroid (paper §3).
-    starts[i].linear() = rotations[i];
-    starts[i].translation() = target_frame->centroid - rotations[i] * source_frame->centroid;
-  }
   std::vector<Transform> refined = starts;
-  result.candidate_scores.assign(rotations.size(), std::numeric_limits<double>::infinity());
-  std::vector<std::size_t> order(rotations.size());
+  result.candidate_scores.assign(starts.size(), std::numeric_limits<double>::infinity());
+  std::vector<std::size_t> order(starts.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  refiner.run(order, settings.refine_iterations, refined, result.candidate_scores);
-  // Stage 2: the few best go on from where they stopped (a partial scan, whose centroid is
-  // off the model's, needs more than a few iterations to settle).
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return result.candidate_scores[a] < result.candidate_scores[b];
-  });
-  order.resize(std::min(order.size(), settings.finalists));
-  refiner.run(order, settings.finalist_iterations, refined, result.candidate_scores);
+  // Every start gets a very short ICP on a small sample (the screen); the best go on from where
+  // they stopped, twice, on a larger sample (a partial scan, whose centroid is off the model's,
+  // needs more than a few iterations to settle). Scores are compared within a round only.
+  refiner.run(screen_sample, order, settings.screen_iterations, refined, result.candidate_scores);
+  for (const auto& [keep, iterations] : {std::pair{settings.survivors, settings.refine_iterations},
+                                         std::pair{settings.finalists, settings.finalist_iterations}}) {
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+      return result.candidate_scores[a] < result.candidate_scores[b];
+    });
+    order.resize(std::min(order.size(), keep));
+    refiner.run(sample, order, iterations, refined, result.candidate_scores);
+  }
   pick_best(refined, result);
   result.T_target_source = refined[result.best_candidate];
   result.T_pca = starts[result.best_candidate];

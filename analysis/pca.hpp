@@ -3,9 +3,11 @@
 // with the target's. The axes' signs and, for near-equal eigenvalues, their order are not
 // defined by the eigen-decomposition, and a partial scan may even order its axes differently
 // from the model. So every proper rotation mapping source axes onto target axes (the 24
-// signed permutations with det = +1), plus finer turns about the sheet normal, is tried, each refined by a short trimmed ICP on a
-// sample, and the best by a robust (trimmed) error is kept. Deterministic: ties go to the
-// lower candidate index.
+// signed permutations with det = +1), plus finer turns about the sheet normal, is tried. A
+// partial scan's centroid is not the model's either: where the rotated scan is clearly shorter
+// than the model along a model axis, it is also tried pushed against either end of the model's
+// box. Every start is refined by a short trimmed ICP on a sample, the best go on for longer, and
+// the best by a robust (trimmed) error is kept. Deterministic: ties go to the lower index.
 
 #include <cstddef>
 #include <vector>
@@ -28,11 +30,19 @@ struct PrincipalFrame {
 Expected<PrincipalFrame> principal_frame(const std::vector<Vec3>& points);
 
 struct PcaAlignSettings {
-  std::size_t sample_points = 500;   ///< source points (evenly strided) to refine and score with
-  int refine_iterations = 8;         ///< ICP updates per candidate
+  std::size_t screen_sample_points = 250;  ///< source points (evenly strided) of the first
+                                           ///< round, which every start goes through
+  int screen_iterations = 4;               ///< ICP updates per start in the first round
+  std::size_t sample_points = 500;   ///< source points (evenly strided) of the later rounds
+  int refine_iterations = 8;         ///< ICP updates per survivor
   double refine_trimmed_fraction = 0.2;  ///< share of worst pairs left out while refining
   double score_trimmed_fraction = 0.2;   ///< share of worst distances left out of the score
   int in_plane_steps = 3;                ///< quarter turn subdivisions about the sheet normal
+  double partial_slack_fraction = 0.15;  ///< along a model axis where the rotated scan is
+                                         ///< shorter than the model by more than this share of
+                                         ///< the model's extent (a partial scan), the scan is
+                                         ///< also tried pushed against either end
+  std::size_t survivors = 16;            ///< best starts of the first round refined further
   std::size_t finalists = 4;             ///< best candidates refined further, then rescored
   int finalist_iterations = 30;          ///< ICP updates per finalist (partial scans start far)
   int threads = 0;                   ///< candidates refined in parallel, 0 = all cores
@@ -42,7 +52,8 @@ struct PcaAlignResult {
   Transform T_target_source = Transform::Identity();  ///< best candidate after its short ICP
   Transform T_pca = Transform::Identity();   ///< that candidate's pure PCA alignment
   std::size_t best_candidate = 0;            ///< index into candidate_scores
-  std::vector<double> candidate_scores;      ///< trimmed mean squared distance, mm^2, each
+  std::vector<double> candidate_scores;      ///< trimmed mean squared distance, mm^2, of every
+                                             ///< start (rotation x translation) after its ICP
   double ambiguity = 0.0;  ///< best score / second-best score: near 1 = the part looks symmetric
 };
 

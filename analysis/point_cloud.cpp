@@ -10,6 +10,15 @@ PointCloud transformed(const PointCloud& cloud, const Transform& T) {
   return out;
 }
 
+std::vector<Vec3> strided_sample(const std::vector<Vec3>& points, std::size_t count) {
+  if (count == 0 || points.size() <= count) return points;
+  const std::size_t stride = (points.size() + count - 1) / count;
+  std::vector<Vec3> out;
+  out.reserve(count);
+  for (std::size_t i = 0; i < points.size(); i += stride) out.push_back(points[i]);
+  return out;
+}
+
 PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices) {
   PointCloud out;
   out.points.reserve(indices.size());

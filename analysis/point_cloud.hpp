@@ -52,4 +52,8 @@ PointCloud transformed(const PointCloud& cloud, const Transform& T);
 /// Keeps the points at `indices`, with their attributes, in that order.
 PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices);
 
+/// Every stride-th point, the stride chosen so that at most `count` remain (all of them when
+/// there are no more than `count`, or count is 0). Deterministic, no randomness.
+std::vector<Vec3> strided_sample(const std::vector<Vec3>& points, std::size_t count);
+
 }  // namespace springscan::analysis

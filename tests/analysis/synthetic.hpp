@@ -46,12 +46,15 @@ inline PointCloud bumpy_surface(std::size_t n, unsigned seed) {
 
 /// n points spread by arc length over the reference side of a profile, with exact normals
 /// (pointing to the left of the path, i.e. +z on the first flange).
-inline PointCloud sample_profile(const ProfileSpec& spec, std::size_t n, unsigned seed) {
+/// Only the stretch of path between the fractions `from` and `to` of its length is sampled when
+/// they are given (a scan that sees part of the profile).
+inline PointCloud sample_profile(const ProfileSpec& spec, std::size_t n, unsigned seed,
+                                 double from = 0.0, double to = 1.0) {
   const auto path = profile_path(spec);
   double total = 0.0;
   for (const auto& e : path) total += e.length_mm();
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> us(0.0, total), uy(0.0, spec.width_mm);
+  std::uniform_real_distribution<double> us(from * total, to * total), uy(0.0, spec.width_mm);
   PointCloud cloud;
   for (std::size_t i = 0; i < n; ++i) {
     double s = us(rng);
