@@ -1,20 +1,28 @@
-// Station figures for docs/performance.md (not a timed test): springscand as a real process
-// under the emulated USB laser scanner, the simulated PLC running N handshake cycles, and
-// four Modbus clients polling the live block at about 100 requests/s each meanwhile.
-//   station_soak [--cycles N] [--points-per-profile P] [--step-mm S]
-// Prints: trigger -> RESULT_VALID minus the scan time (median, p95), the Modbus response time
-// of the polling clients (p50, p99, max), and the daemon's RSS and open fds over the cycles.
+// Station figures for docs/performance.md (a figures program, not a timed test): springscand
+// as a real process under the emulated USB laser scanner measuring the demo hat profile over
+// its whole surface (as scripts/demo.sh; CAD demo/hat-profile.step), the simulated PLC running
+// N handshake cycles, and four Modbus clients polling the live block every 10 ms meanwhile.
+//   station_soak [--cycles N] [--points-per-profile P] [--step-mm S] [--scan-s T]
+//                [--surface-points M]
+// Prints: the scan size; trigger -> RESULT_VALID minus the simulated scan time T (cycle 1,
+// which loads the CAD model, separately); the Modbus response times of the polling clients,
+// all and those answered while the station was ANALYZING; springscand's RSS and open fds
+// over the cycles; its CPU time (user + system) per cycle, next to the wall time, since the
+// machine may be shared.
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "analysis/cad_profile.hpp"
 #include "analysis/sheet_part.hpp"
 #include "proto/springscan.pb.h"
 #include "simulators/plc_client.hpp"
@@ -25,7 +33,16 @@ namespace {
 
 using namespace springscan;
 namespace fs = std::filesystem;
+namespace regs = daemon::regs;
 using Clock = std::chrono::steady_clock;
+
+struct Options {
+  int cycles = 20;
+  int points_per_profile = 1000;
+  double step_mm = 0.4;          // 1000 x 201 profiles over the 80 mm width: ~200k points
+  double scan_s = 1.0;           // the simulated scan's duration (device pacing)
+  long surface_points = 1200000; // dense enough that nearly every bin sees the surface
+};
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
@@ -33,73 +50,117 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
 }
 
-std::pair<long, long> rss_kb_and_fds(pid_t pid) {
-  long rss = 0;
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  for (std::string line; std::getline(status, line);) {
-    if (line.rfind("VmRSS:", 0) == 0) rss = std::stol(line.substr(6));
-  }
+struct Usage {
+  long rss_kb = 0;
   long fds = 0;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator("/proc/" + std::to_string(pid) + "/fd", ec)) {
-    (void)e;
-    ++fds;
+  double cpu_s = 0.0;  // user + system
+};
+
+Usage usage_of(pid_t pid) {
+  Usage u;
+  const std::string proc = "/proc/" + std::to_string(pid);
+  std::ifstream status(proc + "/status");
+  for (std::string line; std::getline(status, line);) {
+    if (line.rfind("VmRSS:", 0) == 0) u.rss_kb = std::stol(line.substr(6));
   }
-  return {rss, fds};
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(proc + "/fd", ec)) {
+    (void)e;
+    ++u.fds;
+  }
+  std::ifstream stat_file(proc + "/stat");
+  std::string stat((std::istreambuf_iterator<char>(stat_file)), {});
+  std::istringstream fields(stat.substr(stat.rfind(')') + 2));  // after "pid (comm) "
+  std::string field;
+  unsigned long utime = 0, stime = 0;
+  for (int i = 3; fields >> field; ++i) {  // fields 14 and 15 of proc(5)
+    if (i == 14) utime = std::stoul(field);
+    if (i == 15) stime = std::stoul(field);
+  }
+  u.cpu_s = static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+  return u;
 }
 
-/// Polls the live block every 10 ms and records each response time (ms) until `stop`.
-void poll_client(int port, const std::atomic<bool>& stop, std::vector<double>& times) {
+/// Response times (ms), split by the station's state in the answer.
+struct PollTimes {
+  std::mutex mutex;
+  std::vector<double> all, analyzing;
+};
+
+/// Polls the live block every 10 ms and records each response time until `stop`.
+void poll_client(int port, const std::atomic<bool>& stop, PollTimes& times) {
   simulators::PlcClientSettings settings;
   settings.port = port;
   settings.send_heartbeat = false;
   auto client = simulators::PlcClient::connect(settings);
   if (!client) return;
-  std::uint16_t live[daemon::regs::kLiveCount];
+  std::uint16_t live[regs::kLiveCount];
   while (!stop) {
     const auto t0 = Clock::now();
-    if (modbus_read_input_registers((*client)->context(), 0, daemon::regs::kLiveCount, live) < 0) {
-      return;
+    if (modbus_read_input_registers((*client)->context(), 0, regs::kLiveCount, live) < 0) return;
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    {
+      std::lock_guard lock(times.mutex);
+      times.all.push_back(ms);
+      if (live[regs::kIrState] == static_cast<std::uint16_t>(regs::State::kAnalyzing))
+        times.analyzing.push_back(ms);
     }
-    times.push_back(std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string arg = argv[i];
+    if (arg == "--cycles") o.cycles = std::stoi(argv[i + 1]);
+    if (arg == "--points-per-profile") o.points_per_profile = std::stoi(argv[i + 1]);
+    if (arg == "--step-mm") o.step_mm = std::stod(argv[i + 1]);
+    if (arg == "--scan-s") o.scan_s = std::stod(argv[i + 1]);
+    if (arg == "--surface-points") o.surface_points = std::stol(argv[i + 1]);
+  }
+  return o;
+}
+
+/// The demo hat as produced (springback 1.5, 0.8, 1.1, 0.4 deg; demo/README.md).
+analysis::Expected<analysis::PointCloud> demo_surface(long points) {
+  analysis::ProfileSpec spec = analysis::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
+  spec.width_mm = 80.0;
+  analysis::ScanSimulationSettings dense;
+  dense.point_count = points;
+  dense.noise_sigma_mm = 0.0;
+  return analysis::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  int cycles = 20, points_per_profile = 1024;
-  double step_mm = 0.3;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string arg = argv[i];
-    if (arg == "--cycles") cycles = std::stoi(argv[i + 1]);
-    if (arg == "--points-per-profile") points_per_profile = std::stoi(argv[i + 1]);
-    if (arg == "--step-mm") step_mm = std::stod(argv[i + 1]);
-  }
+  const Options o = parse(argc, argv);
   std::signal(SIGPIPE, SIG_IGN);
   const fs::path dir = fs::temp_directory_path() / ("springscan-soak-" + std::to_string(getpid()));
   fs::create_directories(dir);
-  const auto nominal = analysis::l_profile(60, 25, 90, 3);
-  const std::string cad = (dir / "part.step").string();
-  if (!analysis::write_profile_cad(nominal, cad).ok()) return 1;
-  analysis::ScanSimulationSettings dense;
-  dense.point_count = 600000;
-  dense.noise_sigma_mm = 0.0;
+  auto surface = demo_surface(o.surface_points);
+  if (!surface) return 1;
   simulators::ScannerDeviceSettings device;
-  device.laser.step_mm = step_mm;
-  device.laser.points_per_profile = points_per_profile;
-  auto emulator =
-      simulators::EmulatedUsbScanner::create(device, *analysis::simulate_scan(nominal, {0.5}, dense));
+  device.laser.step_mm = o.step_mm;
+  device.laser.points_per_profile = o.points_per_profile;
+  device.config.points_per_profile = static_cast<std::uint16_t>(o.points_per_profile);
+  device.scan_duration_s = o.scan_s;
+  auto emulator = simulators::EmulatedUsbScanner::create(device, std::move(*surface));
   if (!emulator) {
     std::fprintf(stderr, "%s\n", emulator.message().c_str());
     return 1;
   }
   const std::string config = (dir / "station.textproto").string();
+  const std::string reports = (dir / "reports").string();
   std::ofstream(config) << "modbus { bind_address: \"127.0.0.1\" port: 0 }\n"
-                           "scanner { kind: LASER_LINE }\n"
-                           "parts { part_id: 1 cad_file: \"" << cad << "\" }\n"
-                           "report_dir: \"reports\"\nreport_retention: 5\nlog_level: \"error\"\n";
+                           "scanner { kind: LASER_LINE timeout_s: 30 }\n"
+                           "parts { part_id: 1 cad_file: \"" SPRINGSCAN_SOURCE_DIR
+                           "/demo/hat-profile.step\"\n  settings { verdict { tolerance_mm: 0.5 "
+                           "angle_tolerance_deg: 2.0 } } }\n"
+                        << "report_dir: \"" << reports << "\"\nmodel_cache_dir: \""
+                        << (dir / "cache").string()
+                        << "\"\nreport_retention: 5\nlog_level: \"error\"\n";
   int result = 0;
   {
     daemon::testing::DaemonProcess station(
@@ -111,46 +172,66 @@ int main(int argc, char** argv) {
     settings.step_timeout_s = 300;
     auto plc = simulators::PlcClient::connect(settings);
     if (!plc) return 1;
-    (void)(*plc)->wait_for([](const auto& s) { return s.bit(daemon::regs::kDiScannerOnline); },
-                           "scanner");
+    (void)(*plc)->wait_for([](const auto& s) { return s.bit(regs::kDiScannerOnline); }, "scanner");
     std::atomic<bool> stop{false};
-    std::vector<std::vector<double>> times(4);
+    PollTimes times;
     std::vector<std::thread> pollers;
-    for (auto& t : times) pollers.emplace_back(poll_client, station.port(), std::cref(stop), std::ref(t));
-    std::vector<double> latency_minus_scan, latency;
-    std::vector<std::pair<long, long>> usage;
-    for (int k = 0; k < cycles; ++k) {
+    for (int i = 0; i < 4; ++i)
+      pollers.emplace_back(poll_client, station.port(), std::cref(stop), std::ref(times));
+    std::vector<double> minus_scan, analysis_ms;
+    std::vector<std::pair<int, Usage>> samples;
+    double first_minus_scan = 0.0;
+    Usage after_first;
+    const auto soak_start = Clock::now();
+    for (int k = 0; k < o.cycles; ++k) {
       auto cycle = (*plc)->run_cycle(static_cast<std::uint16_t>(k + 1), 1);
       if (!cycle || !cycle->accepted || cycle->error_code != 0) {
-        std::fprintf(stderr, "cycle %d failed\n", k + 1);
+        std::fprintf(stderr, "cycle %d failed: %s\n", k + 1,
+                     cycle ? "not accepted or an error" : cycle.message().c_str());
         result = 1;
         break;
       }
-      // Scan time = cycle time (trigger -> analysis end) minus the analysis' own total.
-      springscan::v1::InspectionReport report;
-      const auto record = (dir / "reports" / "").string();
-      char name[32];
-      std::snprintf(name, sizeof name, "r%012d/report.pb", k + 1);
-      std::ifstream in(record + name, std::ios::binary);
+      char name[40];
+      std::snprintf(name, sizeof name, "/r%012d/report.pb", k + 1);
+      std::ifstream in(reports + name, std::ios::binary);
+      v1::InspectionReport report;
       report.ParseFromIstream(&in);
-      const double scan_ms = report.cycle_time_ms() - report.timings_ms().total();
-      latency.push_back(cycle->trigger_to_valid_ms);
-      latency_minus_scan.push_back(cycle->trigger_to_valid_ms - scan_ms);
-      if (k == 0 || k + 1 == cycles || (k + 1) % 10 == 0) usage.push_back(rss_kb_and_fds(station.pid()));
-      if (k == 0) std::printf("scan points: %lld\n", static_cast<long long>(report.input().scan_points()));
+      const double latency = cycle->trigger_to_valid_ms - o.scan_s * 1000.0;
+      if (k == 0) {
+        first_minus_scan = latency;
+        after_first = usage_of(station.pid());
+        std::printf("scan points: %lld, verdict %s\n",
+                    static_cast<long long>(report.input().scan_points()),
+                    report.verdict().pass() ? "pass" : "fail");
+      } else {
+        minus_scan.push_back(latency);
+        analysis_ms.push_back(report.timings_ms().total());
+      }
+      if (k == 0 || k + 1 == o.cycles || (k + 1) % 50 == 0)
+        samples.emplace_back(k + 1, usage_of(station.pid()));
     }
+    const double wall_s = std::chrono::duration<double>(Clock::now() - soak_start).count();
+    const Usage end = usage_of(station.pid());
     stop = true;
     for (auto& t : pollers) t.join();
-    std::vector<double> all;
-    for (const auto& t : times) all.insert(all.end(), t.begin(), t.end());
-    std::printf("cycles %zu: trigger->valid median %.0f ms; minus scan: median %.0f ms, p95 %.0f ms\n",
-                latency.size(), percentile(latency, 0.5), percentile(latency_minus_scan, 0.5),
-                percentile(latency_minus_scan, 0.95));
-    std::printf("modbus responses %zu: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n", all.size(),
-                percentile(all, 0.5), percentile(all, 0.99), percentile(all, 1.0));
-    for (std::size_t i = 0; i < usage.size(); ++i) {
-      std::printf("usage sample %zu: RSS %ld kB, open fds %ld\n", i, usage[i].first, usage[i].second);
-    }
+    std::printf("cycle 1 (loads the CAD model): trigger->valid minus %.2f s scan: %.0f ms\n",
+                o.scan_s, first_minus_scan);
+    std::printf("cycles 2..%d: trigger->valid minus scan: median %.0f ms, p95 %.0f ms, max %.0f "
+                "ms; analysis (report timings total) median %.0f ms\n",
+                o.cycles, percentile(minus_scan, 0.5), percentile(minus_scan, 0.95),
+                percentile(minus_scan, 1.0), percentile(analysis_ms, 0.5));
+    std::printf("modbus responses %zu: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n", times.all.size(),
+                percentile(times.all, 0.5), percentile(times.all, 0.99),
+                percentile(times.all, 1.0));
+    std::printf("  while ANALYZING %zu: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n",
+                times.analyzing.size(), percentile(times.analyzing, 0.5),
+                percentile(times.analyzing, 0.99), percentile(times.analyzing, 1.0));
+    for (const auto& [cycle, u] : samples)
+      std::printf("after cycle %d: RSS %ld kB, open fds %ld\n", cycle, u.rss_kb, u.fds);
+    const int later = std::max(1, o.cycles - 1);
+    std::printf("springscand CPU: %.2f s for cycles 2..%d (%.0f ms per cycle); wall %.1f s for "
+                "all %d cycles\n", end.cpu_s - after_first.cpu_s, o.cycles,
+                1000.0 * (end.cpu_s - after_first.cpu_s) / later, wall_s, o.cycles);
   }
   fs::remove_all(dir);
   return result;

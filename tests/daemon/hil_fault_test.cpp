@@ -188,6 +188,12 @@ TEST_F(HilTest, SigtermWhileTheScanWaitsOnASilentDeviceStopsPromptly) {
   const int status = daemon->stop(SIGTERM);
   EXPECT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
   EXPECT_EQ(WEXITSTATUS(status), 0);
+  // The interrupted inspection is on record as a cancelled scan, not as a result.
+  const v1::InspectionReport cancelled = report(1);
+  EXPECT_EQ(cancelled.result_code(), static_cast<std::uint32_t>(regs::ResultCode::kScanFailed));
+  ASSERT_GE(cancelled.verdict().reasons_size(), 1);
+  EXPECT_NE(cancelled.verdict().reasons(0).find("cancelled"), std::string::npos)
+      << cancelled.verdict().reasons(0);
 }
 
 }  // namespace

@@ -110,6 +110,7 @@ class HilTest : public ::testing::Test {
     settings.step_timeout_s = 180.0;  // generous: a loaded 2-core machine, the sanitizer build
     auto client = simulators::PlcClient::connect(settings);
     if (!client) throw std::runtime_error(client.message());
+    modbus_set_response_timeout((*client)->context(), 10, 0);  // not 2 s: a loaded machine
     return std::move(*client);
   }
   static void wait_online(simulators::PlcClient& plc, bool online = true) {

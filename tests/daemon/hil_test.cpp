@@ -20,7 +20,7 @@ using testing::HilTest;
 /// `values`, when given, are written instead of read.
 std::pair<int, std::string> mbpoll(int port, const std::string& options,
                                    const std::string& values = "") {
-  return testing::run_command("mbpoll -m tcp -a 1 -0 -1 -p " + std::to_string(port) + " " +
+  return testing::run_command("mbpoll -m tcp -a 1 -0 -1 -o 10 -p " + std::to_string(port) + " " +
                               options + " 127.0.0.1 " + values);
 }
 
