@@ -15,7 +15,16 @@ std::vector<Vec3> strided_sample(const std::vector<Vec3>& points, std::size_t co
   const std::size_t stride = (points.size() + count - 1) / count;
   std::vector<Vec3> out;
   out.reserve(count);
-  for (std::size_t i = 0; i < points.size(); i += stride) out.push_back(points[i]);
+  for (std::size_t block = 0, i = 0; i < points.size(); ++block, i += stride) {
+    // splitmix64 of the block number: a fixed offset that no periodic order of the points
+    // (scan lines of equal length, generated patterns) can line up with.
+    std::uint64_t z = (block + 1) * 0x9E3779B97F4A7C15ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    const std::size_t pick = i + static_cast<std::size_t>(z % stride);
+    out.push_back(points[std::min(pick, points.size() - 1)]);
+  }
   return out;
 }
 

@@ -52,8 +52,11 @@ PointCloud transformed(const PointCloud& cloud, const Transform& T);
 /// Keeps the points at `indices`, with their attributes, in that order.
 PointCloud select(const PointCloud& cloud, const std::vector<std::uint32_t>& indices);
 
-/// Every stride-th point, the stride chosen so that at most `count` remain (all of them when
-/// there are no more than `count`, or count is 0). Deterministic, no randomness.
+/// One point of every run of `stride` consecutive points, the stride chosen so that at most
+/// `count` remain (all points when there are no more than `count`, or count is 0). The offset
+/// within each run is a fixed hash of the run's number: deterministic, yet a cloud in scan-line
+/// order, or with every 50th point an outlier, does not alias into a sample of one column or of
+/// outliers only (a plain stride did, and the global fit then scored every pose on outliers).
 std::vector<Vec3> strided_sample(const std::vector<Vec3>& points, std::size_t count);
 
 }  // namespace springscan::analysis
