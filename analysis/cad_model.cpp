@@ -78,7 +78,12 @@ std::string cache_settings_key(const CadModelSettings& s) {
 Expected<PartModel> load_part_model(const std::string& path, const CadModelSettings& settings) {
   auto shape = load_cad(path, settings.import);
   if (!shape) return shape.error();
-  return build_model(*shape, settings);
+  auto model = build_model(*shape, settings);
+  if (!model) return model.error();
+  auto sha256 = sha256_file(path);
+  if (!sha256) return sha256.error();
+  model->source_sha256 = std::move(*sha256);
+  return model;
 }
 
 Expected<CachedModelLoad> load_part_model_cached(const std::string& path,
@@ -92,6 +97,7 @@ Expected<CachedModelLoad> load_part_model_cached(const std::string& path,
   const std::string key = cache_settings_key(settings);
   if (auto cached = read_cache(out.cache_file, *sha256, key, settings)) {
     out.model = std::move(*cached);
+    out.model.source_sha256 = *sha256;
     out.cache_hit = true;
     return out;
   }
@@ -100,6 +106,7 @@ Expected<CachedModelLoad> load_part_model_cached(const std::string& path,
   auto model = build_model(*shape, settings);
   if (!model) return model.error();
   out.model = std::move(*model);
+  out.model.source_sha256 = *sha256;
   std::error_code ec;
   std::filesystem::create_directories(cache_dir, ec);
   if (ec) {

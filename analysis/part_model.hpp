@@ -4,6 +4,7 @@
 // builds a PartModel from IGES/STEP, tests and simulators build one from synthetic geometry.
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "analysis/point_cloud.hpp"
@@ -59,6 +60,9 @@ struct PartModel {
   PartSegmentation segmentation;
   int face_count = 0;
   std::shared_ptr<const SurfaceDistance> distance;  ///< null: distances to the samples instead
+  std::string source_sha256;  ///< hex SHA-256 of the file the model was built from (the report's
+                              ///< input.cad_sha256: which CAD revision was measured against);
+                              ///< empty for a model built in memory
 };
 
 }  // namespace springscan::analysis

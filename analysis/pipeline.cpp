@@ -194,6 +194,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan.size()));
   report.mutable_input()->set_model_points(static_cast<std::int64_t>(model.samples.size()));
   report.mutable_input()->set_cad_faces(model.face_count);
+  report.mutable_input()->set_cad_sha256(model.source_sha256);
   if (auto error = check_inputs(model, scan, report)) return *error;
   auto& timings = *report.mutable_timings_ms();
 

@@ -15,6 +15,7 @@
 #include "analysis/point_io.hpp"
 #include "analysis/point_model.hpp"
 #include "analysis/report_files.hpp"
+#include "analysis/sha256.hpp"
 #include "cli/cli_common.hpp"
 #include "report/report_html.hpp"
 
@@ -68,6 +69,9 @@ analysis::Expected<analysis::PartModel> load_point_model(const std::string& path
   if (!cloud) return analysis::fail(cloud.message());
   auto model = analysis::part_model_from_points(*cloud);
   if (!model) return analysis::fail(path + ": " + model.message());
+  auto sha256 = analysis::sha256_file(path);
+  if (!sha256) return analysis::fail(sha256.message());
+  model->model.source_sha256 = std::move(*sha256);
   return std::move(model->model);
 }
 

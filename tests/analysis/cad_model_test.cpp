@@ -34,6 +34,16 @@ TEST(Sha256, FileMatchesSourcesMd) {
   EXPECT_FALSE(sha256_file("/nonexistent/file.step"));
 }
 
+// The report names the CAD revision measured against: the model carries its file's SHA-256.
+TEST(CadModel, ModelCarriesItsCadFilesSha256) {
+  CadModelSettings settings;
+  settings.sampling.sample_count = 2000;
+  const auto model = load_part_model(shared_cad("nema-17-bracket.step"), settings);
+  ASSERT_TRUE(model) << model.message();
+  ASSERT_EQ(model->source_sha256.size(), 64u);
+  EXPECT_EQ(model->source_sha256.substr(0, 8), "bc7b546d");  // SOURCES.md
+}
+
 CadModelSettings small_settings() {
   CadModelSettings settings;
   settings.sampling.sample_count = 3000;
@@ -74,6 +84,8 @@ TEST(CadModel, CacheHitMissAndInvalidation) {
   const auto second = load_part_model_cached(part, cache, settings);
   ASSERT_TRUE(second) << second.message();
   EXPECT_TRUE(second->cache_hit);
+  EXPECT_EQ(first->model.source_sha256, first->source_sha256);
+  EXPECT_EQ(second->model.source_sha256, first->source_sha256);
   EXPECT_EQ(second->model.samples.points, first->model.samples.points);
   EXPECT_EQ(second->model.samples.face_ids, first->model.samples.face_ids);
   ASSERT_EQ(second->model.segmentation.bends.size(), 1u);

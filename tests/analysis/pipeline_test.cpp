@@ -44,11 +44,13 @@ Scenario make_setup(unsigned seed) {
 }
 
 TEST(Pipeline, FillsGlobalFitDeviationReductionAndTimings) {
-  const Scenario s = make_setup(51);
+  Scenario s = make_setup(51);
+  s.model.source_sha256 = std::string(64, 'c');
   auto outcome = run_inspection(s.model, s.scan);
   ASSERT_TRUE(outcome) << outcome.message();
   const v1::InspectionReport& r = outcome->report;
   EXPECT_EQ(r.schema(), "springscan.report.v1");
+  EXPECT_EQ(r.input().cad_sha256(), s.model.source_sha256);
   ASSERT_EQ(r.global_fit().transform_size(), 16);
   const Transform T = report_transform(r.global_fit());
   EXPECT_LT(testing::rotation_error_rad(T, s.T_cad_scan), 0.01 * kDeg);
