@@ -74,6 +74,12 @@ Expected<Assignment> solve_sparse(const CandidateGraph& graph);
 /// feasibility check before solve_sparse; the graph is feasible iff this equals graph.rows.
 std::size_t maximum_matching_size(const CandidateGraph& graph);
 
+/// The same, continuing from a matching: `row_to_col` holds a column per row or -1 (entries
+/// that are not an edge of their row or reuse a column are dropped) and receives a maximum
+/// matching. Widening a candidate graph keeps the previous matching valid, so each round only
+/// adds the missing augmentations. Returns the matching's size.
+std::size_t maximum_matching(const CandidateGraph& graph, std::vector<std::int32_t>& row_to_col);
+
 /// The outcome of a certificate check: ok, or the first violated condition with its numbers.
 struct CertificateCheck {
   bool ok = false;

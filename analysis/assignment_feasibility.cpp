@@ -17,8 +17,30 @@ class HopcroftKarp {
       : g_(g), row_match_(g.rows, -1), col_match_(g.cols, -1), layer_(g.rows, kUnreached),
         next_edge_(g.rows, 0) {}
 
-  std::size_t run() {
+  /// Starts from `start` (a column per row or -1); entries that are not an edge of their row,
+  /// or reuse a column, are dropped. Returns the size of what was kept.
+  std::size_t seed(const std::vector<std::int32_t>& start) {
     std::size_t size = 0;
+    for (std::size_t i = 0; i < g_.rows && i < start.size(); ++i) {
+      const std::int32_t j = start[i];
+      if (j < 0 || static_cast<std::size_t>(j) >= g_.cols ||
+          col_match_[static_cast<std::size_t>(j)] >= 0) {
+        continue;
+      }
+      for (std::size_t e = g_.row_offsets[i]; e < g_.row_offsets[i + 1]; ++e) {
+        if (g_.col_index[e] != j) continue;
+        row_match_[i] = j;
+        col_match_[static_cast<std::size_t>(j)] = static_cast<std::int32_t>(i);
+        ++size;
+        break;
+      }
+    }
+    return size;
+  }
+
+  /// Completes the matching to a maximum one; returns its size.
+  std::size_t run(std::size_t size) {
+    size += greedy();
     while (build_layers()) {
       for (std::size_t i = 0; i < g_.rows; ++i) next_edge_[i] = g_.row_offsets[i];
       for (std::size_t i = 0; i < g_.rows; ++i) {
@@ -28,7 +50,27 @@ class HopcroftKarp {
     return size;
   }
 
+  const std::vector<std::int32_t>& row_match() const { return row_match_; }
+
  private:
+  // Each free row takes its first free candidate (its nearest, on a k-nearest graph): most
+  // rows are matched before the first phase, so few phases remain.
+  std::size_t greedy() {
+    std::size_t size = 0;
+    for (std::size_t i = 0; i < g_.rows; ++i) {
+      if (row_match_[i] >= 0) continue;
+      for (std::size_t e = g_.row_offsets[i]; e < g_.row_offsets[i + 1]; ++e) {
+        const auto j = static_cast<std::size_t>(g_.col_index[e]);
+        if (col_match_[j] >= 0) continue;
+        col_match_[j] = static_cast<std::int32_t>(i);
+        row_match_[i] = static_cast<std::int32_t>(j);
+        ++size;
+        break;
+      }
+    }
+    return size;
+  }
+
   // BFS from all free rows through alternating paths; true if some free column is reachable.
   bool build_layers() {
     std::vector<std::size_t> queue;
@@ -98,7 +140,15 @@ class HopcroftKarp {
 
 std::size_t maximum_matching_size(const CandidateGraph& graph) {
   if (graph.row_offsets.size() != graph.rows + 1) return 0;
-  return HopcroftKarp(graph).run();
+  return HopcroftKarp(graph).run(0);
+}
+
+std::size_t maximum_matching(const CandidateGraph& graph, std::vector<std::int32_t>& row_to_col) {
+  if (graph.row_offsets.size() != graph.rows + 1) return 0;
+  HopcroftKarp matcher(graph);
+  const std::size_t size = matcher.run(matcher.seed(row_to_col));
+  row_to_col = matcher.row_match();
+  return size;
 }
 
 }  // namespace springscan::analysis

@@ -105,7 +105,8 @@ bool solve_sparse_priced(const std::vector<Vec3>& rows, const KdTree& tree,
   std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(s.candidate_neighbors),
                                         tree.size());
   CandidateGraph graph = knn_graph(rows, tree, k, {});
-  while (maximum_matching_size(graph) < rows.size()) {
+  std::vector<std::int32_t> matching(rows.size(), -1);  // carried over: k only grows
+  while (maximum_matching(graph, matching) < rows.size()) {
     if (out.widening_rounds >= s.max_widening_rounds || k >= tree.size()) return false;
     ++out.widening_rounds;
     k = std::min(2 * k, tree.size());

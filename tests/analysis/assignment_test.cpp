@@ -206,6 +206,41 @@ TEST(SparseAssignment, InfeasibleGraphIsReported) {
   EXPECT_NE(a.message().find("no row-saturating matching"), std::string::npos);
 }
 
+TEST(SparseAssignment, MaximumMatchingContinuesFromASeed) {
+  std::mt19937 rng(31);
+  std::bernoulli_distribution keep(0.3);
+  for (std::uint32_t trial = 0; trial < 20; ++trial) {
+    DenseCostMatrix m = random_matrix(12, 14, 300 + trial);
+    for (auto& x : m.values) {
+      if (!keep(rng)) x = std::numeric_limits<double>::infinity();
+    }
+    const CandidateGraph g = graph_of(m);
+    // A seed with a valid pair, a pair that is not an edge, a reused column and junk.
+    std::vector<std::int32_t> matching(12, -1);
+    if (g.row_offsets[1] > g.row_offsets[0]) matching[0] = g.col_index[0];
+    for (std::int32_t j = 0; j < 14; ++j) {
+      if (!(m.at(1, static_cast<std::size_t>(j)) < std::numeric_limits<double>::infinity())) {
+        matching[1] = j;
+      }
+    }
+    matching[2] = matching[0];
+    matching[3] = 99;
+    const std::size_t size = maximum_matching(g, matching);
+    EXPECT_EQ(size, maximum_matching_size(g));
+    std::vector<int> used(14, 0);
+    std::size_t matched = 0;
+    for (std::size_t i = 0; i < 12; ++i) {
+      const std::int32_t j = matching[i];
+      if (j < 0) continue;
+      ++matched;
+      ASSERT_LT(j, 14);
+      EXPECT_LT(m.at(i, static_cast<std::size_t>(j)), std::numeric_limits<double>::infinity());
+      EXPECT_EQ(++used[static_cast<std::size_t>(j)], 1);
+    }
+    EXPECT_EQ(matched, size);
+  }
+}
+
 TEST(SparseAssignment, EmptySingleAndMalformed) {
   auto a = solve_sparse(CandidateGraph{0, 0, {0}, {}, {}});
   ASSERT_TRUE(a.ok());
