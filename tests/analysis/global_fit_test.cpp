@@ -124,12 +124,16 @@ TEST(GlobalFit, HalfOfABentProfileIsPlacedWhereItBelongs) {
 
 // Issue 3: sigma = 0.02 mm noise, 2 % outliers, a 200k-point scan (20k under the sanitizers,
 // which run it about 10x slower) from any pose: rotation within 0.01 degrees, translation
-// within 0.01 mm, model and scan sampled independently.
+// within 0.01 mm (at 200k), model and scan sampled independently.
 TEST(GlobalFit, NoisyScanWithOutliersFromAnyPoseWithinAHundredth) {
 #if defined(__SANITIZE_ADDRESS__)
+  // A tenth of the points: the noise averages down sqrt(10) times less, so the bounds widen by
+  // that (the 200k bounds are the issue's; a 20k fit measured 0.011 mm).
   constexpr std::size_t kScanPoints = 20'000;
+  constexpr double kBoundScale = 3.2;
 #else
   constexpr std::size_t kScanPoints = 200'000;
+  constexpr double kBoundScale = 1.0;
 #endif
   const PointCloud model = testing::bumpy_surface(100'000, 60);
   const KdTree tree(model.points);
@@ -146,8 +150,9 @@ TEST(GlobalFit, NoisyScanWithOutliersFromAnyPoseWithinAHundredth) {
     auto fit = global_fit(scan.points, tree, model.normals, settings);
     ASSERT_TRUE(fit) << fit.message();
     const Transform T_true = T_scan_cad.inverse();
-    EXPECT_LT(testing::rotation_error_rad(fit->T_cad_scan, T_true), 0.01 * kPi / 180.0);
-    EXPECT_LT((fit->T_cad_scan.translation() - T_true.translation()).norm(), 0.01);
+    EXPECT_LT(testing::rotation_error_rad(fit->T_cad_scan, T_true),
+              kBoundScale * 0.01 * kPi / 180.0);
+    EXPECT_LT((fit->T_cad_scan.translation() - T_true.translation()).norm(), kBoundScale * 0.01);
     EXPECT_TRUE(fit->icp.converged) << fit->icp.stop_reason;
   }
 }
