@@ -4,22 +4,16 @@
 #include <random>
 
 #include "analysis/kdtree.hpp"
+#include "tests/analysis/synthetic.hpp"
 
 namespace {
 
 using springscan::analysis::KdTree;
 using springscan::analysis::Vec3;
-
-std::vector<Vec3> random_points(std::size_t n, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-500.0, 500.0);
-  std::vector<Vec3> points(n);
-  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
-  return points;
-}
+using springscan::analysis::testing::uniform_points;
 
 void BM_KdTreeBuild(benchmark::State& state) {
-  const auto points = random_points(static_cast<std::size_t>(state.range(0)), 1);
+  const auto points = uniform_points(static_cast<std::size_t>(state.range(0)), 1, -500.0, 500.0);
   for (auto _ : state) {
     KdTree tree(points);
     benchmark::DoNotOptimize(tree.size());
@@ -29,8 +23,8 @@ void BM_KdTreeBuild(benchmark::State& state) {
 BENCHMARK(BM_KdTreeBuild)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond);
 
 void BM_KdTreeNearest(benchmark::State& state) {
-  KdTree tree(random_points(static_cast<std::size_t>(state.range(0)), 2));
-  const auto queries = random_points(100'000, 3);
+  KdTree tree(uniform_points(static_cast<std::size_t>(state.range(0)), 2, -500.0, 500.0));
+  const auto queries = uniform_points(100'000, 3, -500.0, 500.0);
   for (auto _ : state) {
     double sum = 0.0;
     for (const auto& q : queries) sum += tree.nearest(q)->squared_distance;

@@ -20,18 +20,11 @@
 #include "analysis/kcenter.hpp"
 #include "analysis/sheet_profile.hpp"
 #include "tests/analysis/profile_sampling.hpp"
+#include "tests/analysis/synthetic.hpp"
 
 namespace {
 
 using namespace springscan::analysis;
-
-std::vector<Vec3> random_points(std::size_t n, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 100.0);
-  std::vector<Vec3> points(n);
-  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
-  return points;
-}
 
 // The pipeline's k-center reduction (paper section 2) to exactly n centers.
 std::vector<Vec3> kcenter(const std::vector<Vec3>& points, std::size_t n) {
@@ -72,7 +65,8 @@ Instance surface_instance(std::size_t n, double springback_deg = 3.0) {
 }
 
 Instance random_instance(std::size_t n) {
-  return {"random_" + std::to_string(n), random_points(n, 1), random_points(n, 2)};
+  return {"random_" + std::to_string(n), testing::uniform_points(n, 1),
+          testing::uniform_points(n, 2)};
 }
 
 const Instance& cached(const std::function<Instance()>& make, int which) {

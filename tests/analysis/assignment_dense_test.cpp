@@ -13,17 +13,11 @@
 #include <utility>
 
 #include "analysis/assignment.hpp"
+#include "tests/analysis/assignment_brute_force.hpp"
+#include "tests/analysis/synthetic.hpp"
 
 namespace springscan::analysis {
 namespace {
-
-std::vector<Vec3> random_points(std::size_t n, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 100.0);
-  std::vector<Vec3> points(n);
-  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
-  return points;
-}
 
 DenseCostMatrix squared_distances(const std::vector<Vec3>& rows, const std::vector<Vec3>& cols) {
   DenseCostMatrix m{rows.size(), cols.size(), std::vector<double>(rows.size() * cols.size())};
@@ -42,18 +36,6 @@ CandidateGraph complete_graph(const DenseCostMatrix& m) {
     g.row_offsets.push_back(g.col_index.size());
   }
   return g;
-}
-
-double brute_force(const DenseCostMatrix& m) {
-  std::vector<std::size_t> perm(m.cols);
-  std::iota(perm.begin(), perm.end(), 0);
-  double best = std::numeric_limits<double>::infinity();
-  do {
-    double c = 0.0;
-    for (std::size_t i = 0; i < m.rows; ++i) c += m.at(i, perm[i]);
-    best = std::min(best, c);
-  } while (std::next_permutation(perm.begin(), perm.end()));
-  return best;
 }
 
 double largest(const DenseCostMatrix& m) {
@@ -79,8 +61,8 @@ TEST(DenseSolver, PointsAndMatrixAgreeAcrossLaneAndBlockBoundaries) {
       {17, 17}, {31, 33}, {33, 33}, {47, 48}, {64, 64}, {65, 65}, {80, 130}, {101, 101}};
   std::uint32_t seed = 40;
   for (const auto& [rows, cols] : shapes) {
-    const auto p = random_points(rows, seed++);
-    const auto q = random_points(cols, seed++);
+    const auto p = testing::uniform_points(rows, seed++);
+    const auto q = testing::uniform_points(cols, seed++);
     const DenseCostMatrix m = squared_distances(p, q);
     const auto by_points = solve_dense_points(p, q);
     const auto by_matrix = solve_dense(m);
@@ -88,7 +70,7 @@ TEST(DenseSolver, PointsAndMatrixAgreeAcrossLaneAndBlockBoundaries) {
     expect_optimal(m, *by_points, "points");
     expect_optimal(m, *by_matrix, "matrix");
     if (cols <= 8) {
-      EXPECT_NEAR(by_points->total_cost, brute_force(m), 1e-9 * largest(m));
+      EXPECT_NEAR(by_points->total_cost, testing::brute_force_cost(m), 1e-9 * largest(m));
     }
   }
 }
@@ -129,11 +111,11 @@ TEST(DenseSolver, ExactTiesFromIntegerCostsAndDuplicatePoints) {
     ASSERT_TRUE(a.ok());
     expect_optimal(m, *a, "integer");
     if (cols <= 8) {
-      EXPECT_EQ(a->total_cost, brute_force(m));
+      EXPECT_EQ(a->total_cost, testing::brute_force_cost(m));
     }
   }
   // Every point twice in both sets: cost 0 is reachable and optimal.
-  auto p = random_points(20, 5);
+  auto p = testing::uniform_points(20, 5);
   p.insert(p.end(), p.begin(), p.end());
   auto q = p;
   std::reverse(q.begin(), q.end());
@@ -156,7 +138,7 @@ TEST(DenseSolver, SquareWarmStartShiftsPotentialsToTheRectangularForm) {
     EXPECT_LE(*std::max_element(a->v.begin(), a->v.end()), 0.0);
     expect_optimal(m, *a, "offset");
     if (n <= 8) {
-      EXPECT_NEAR(a->total_cost, brute_force(m), 1e-6);
+      EXPECT_NEAR(a->total_cost, testing::brute_force_cost(m), 1e-6);
     }
   }
 }

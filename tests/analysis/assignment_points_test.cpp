@@ -1,6 +1,7 @@
 // Point-set matching: dense and sparse paths agree, the global certificate holds, infeasible
 // candidate graphs are widened or fall back to the dense solver.
 #include "analysis/assignment_points.hpp"
+#include "tests/analysis/synthetic.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,14 +12,6 @@
 
 namespace springscan::analysis {
 namespace {
-
-std::vector<Vec3> random_points(std::size_t n, std::uint32_t seed, double size = 100.0) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, size);
-  std::vector<Vec3> points(n);
-  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
-  return points;
-}
 
 // Brute force over all injections of the model into the scan.
 double brute_force(const std::vector<Vec3>& model, const std::vector<Vec3>& scan) {
@@ -54,8 +47,8 @@ void expect_consistent(const PointMatching& m, const std::vector<Vec3>& model,
 TEST(PointMatching, BruteForceSmallSets) {
   for (std::size_t n_model = 1; n_model <= 7; ++n_model) {
     for (std::size_t n_scan : {n_model, n_model + 1}) {
-      const auto model = random_points(n_model, static_cast<std::uint32_t>(n_model));
-      const auto scan = random_points(n_scan, static_cast<std::uint32_t>(50 + n_scan));
+      const auto model = testing::uniform_points(n_model, static_cast<std::uint32_t>(n_model));
+      const auto scan = testing::uniform_points(n_scan, static_cast<std::uint32_t>(50 + n_scan));
       const auto m = match_points(model, scan);
       ASSERT_TRUE(m.ok()) << m.message();
       EXPECT_NEAR(m->total_cost, brute_force(model, scan), 1e-9);
@@ -65,8 +58,8 @@ TEST(PointMatching, BruteForceSmallSets) {
 }
 
 TEST(PointMatching, MoreModelThanScanIsTransposed) {
-  const auto model = random_points(7, 3);
-  const auto scan = random_points(5, 4);
+  const auto model = testing::uniform_points(7, 3);
+  const auto scan = testing::uniform_points(5, 4);
   const auto m = match_points(model, scan);
   ASSERT_TRUE(m.ok());
   EXPECT_FALSE(m->rows_are_model);
@@ -77,8 +70,8 @@ TEST(PointMatching, MoreModelThanScanIsTransposed) {
 TEST(PointMatching, SparseAgreesWithDense) {
   // Square (auction warm start), near-square (dummy rows, auction) and rectangular.
   for (const std::size_t n_scan : {400u, 405u, 430u}) {
-    const auto model = random_points(400, 5);
-    const auto scan = random_points(n_scan, 6);
+    const auto model = testing::uniform_points(400, 5);
+    const auto scan = testing::uniform_points(n_scan, 6);
     const auto dense = match_points(model, scan, {.dense_limit = 10'000});
     ASSERT_TRUE(dense.ok());
     EXPECT_TRUE(dense->used_dense);
@@ -120,9 +113,10 @@ TEST(PointMatching, DuplicatesAndTies) {
 // 40 model points near the origin; the scan has 2 points there and a far cluster. The k nearest
 // scan points of every model point are the same few, so small k has no perfect matching.
 void crowded(std::vector<Vec3>& model, std::vector<Vec3>& scan) {
-  model = random_points(40, 8, 5.0);
+  model = testing::uniform_points(40, 8, 0.0, 5.0);
   scan = {Vec3(1, 1, 1), Vec3(2, 2, 2)};
-  for (const auto& p : random_points(60, 9, 10.0)) scan.push_back(p + Vec3(500, 0, 0));
+  for (const auto& p : testing::uniform_points(60, 9, 0.0, 10.0))
+    scan.push_back(p + Vec3(500, 0, 0));
 }
 
 TEST(PointMatching, InfeasibleGraphIsWidened) {
@@ -177,8 +171,8 @@ TEST(PointMatching, RejectsBadInput) {
 }
 
 TEST(PointMatching, CertificateRejectsSuboptimalAssignment) {
-  const auto model = random_points(30, 12);
-  const auto scan = random_points(30, 13);
+  const auto model = testing::uniform_points(30, 12);
+  const auto scan = testing::uniform_points(30, 13);
   const auto m = match_points(model, scan);
   ASSERT_TRUE(m.ok());
   Assignment worse = m->assignment;

@@ -1,5 +1,6 @@
 // The dense and sparse assignment solvers against brute force and their own dual certificate.
 #include "analysis/assignment.hpp"
+#include "tests/analysis/assignment_brute_force.hpp"
 
 #include <gtest/gtest.h>
 
@@ -40,20 +41,6 @@ DenseCostMatrix squared_distances(std::size_t rows, std::size_t cols, std::uint3
   return m;
 }
 
-// Brute force: the cheapest injection rows -> cols over all permutations of the columns
-// (the first `rows` entries of each permutation). Infinite costs mark missing edges.
-double brute_force(const DenseCostMatrix& m) {
-  std::vector<std::size_t> perm(m.cols);
-  std::iota(perm.begin(), perm.end(), 0);
-  double best = std::numeric_limits<double>::infinity();
-  do {
-    double c = 0.0;
-    for (std::size_t i = 0; i < m.rows; ++i) c += m.at(i, perm[i]);
-    best = std::min(best, c);
-  } while (std::next_permutation(perm.begin(), perm.end()));
-  return best;
-}
-
 // The graph of every finite entry of `m` (infinite = no edge).
 CandidateGraph graph_of(const DenseCostMatrix& m) {
   CandidateGraph g{m.rows, m.cols, {0}, {}, {}};
@@ -81,7 +68,7 @@ TEST(DenseAssignment, MatchesBruteForceUpToEight) {
       const DenseCostMatrix m = random_matrix(rows, cols, seed++);
       const auto a = solve_dense(m);
       ASSERT_TRUE(a.ok()) << a.message();
-      EXPECT_NEAR(a->total_cost, brute_force(m), kTol) << rows << "x" << cols;
+      EXPECT_NEAR(a->total_cost, testing::brute_force_cost(m), kTol) << rows << "x" << cols;
       expect_certified(m, *a);
     }
   }
@@ -110,7 +97,7 @@ TEST(DenseAssignment, TiesAndDuplicatesStayOptimal) {
   for (auto& x : ints.values) x = die(rng);
   a = solve_dense(ints);
   ASSERT_TRUE(a.ok());
-  EXPECT_DOUBLE_EQ(a->total_cost, brute_force(ints));
+  EXPECT_DOUBLE_EQ(a->total_cost, testing::brute_force_cost(ints));
   expect_certified(ints, *a);
   // Identical rows (duplicate model points) and identical columns (duplicate scan points).
   DenseCostMatrix dup = random_matrix(6, 8, 9);
@@ -118,7 +105,7 @@ TEST(DenseAssignment, TiesAndDuplicatesStayOptimal) {
   for (std::size_t i = 0; i < 6; ++i) dup.values[i * 8 + 5] = dup.values[i * 8 + 2];
   a = solve_dense(dup);
   ASSERT_TRUE(a.ok());
-  EXPECT_NEAR(a->total_cost, brute_force(dup), kTol);
+  EXPECT_NEAR(a->total_cost, testing::brute_force_cost(dup), kTol);
   expect_certified(dup, *a);
 }
 
@@ -173,7 +160,7 @@ TEST(SparseAssignment, MatchesBruteForceOnSparseGraphs) {
     for (auto& x : m.values) {
       if (!keep(rng)) x = std::numeric_limits<double>::infinity();
     }
-    const double best = brute_force(m);
+    const double best = testing::brute_force_cost(m);
     const CandidateGraph g = graph_of(m);
     const auto a = solve_sparse(g);
     const bool feasible = best < std::numeric_limits<double>::infinity();

@@ -6,16 +6,10 @@
 #include <random>
 #include <thread>
 
+#include "tests/analysis/synthetic.hpp"
+
 namespace springscan::analysis {
 namespace {
-
-std::vector<Vec3> random_points(std::size_t n, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-50.0, 50.0);
-  std::vector<Vec3> points(n);
-  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
-  return points;
-}
 
 // Brute-force oracle (STYLE.md section 8): every point sorted by distance, ties by index.
 std::vector<Neighbor> brute_force(const std::vector<Vec3>& points, const Vec3& q) {
@@ -50,9 +44,9 @@ TEST(KdTree, SinglePoint) {
 }
 
 TEST(KdTree, NearestMatchesBruteForce) {
-  const auto points = random_points(5000, 1);
+  const auto points = testing::uniform_points(5000, 1, -50.0, 50.0);
   KdTree tree(points);
-  for (const auto& q : random_points(300, 2)) {
+  for (const auto& q : testing::uniform_points(300, 2, -50.0, 50.0)) {
     const auto expected = brute_force(points, q);
     auto n = tree.nearest(q);
     ASSERT_TRUE(n.has_value());
@@ -61,9 +55,9 @@ TEST(KdTree, NearestMatchesBruteForce) {
 }
 
 TEST(KdTree, NearestWithinRespectsTheBound) {
-  const auto points = random_points(2000, 3);
+  const auto points = testing::uniform_points(2000, 3, -50.0, 50.0);
   KdTree tree(points);
-  for (const auto& q : random_points(200, 4)) {
+  for (const auto& q : testing::uniform_points(200, 4, -50.0, 50.0)) {
     const double d = std::sqrt(brute_force(points, q)[0].squared_distance);
     EXPECT_TRUE(tree.nearest(q, d * 1.001).has_value());
     EXPECT_FALSE(tree.nearest(q, d * 0.999).has_value());
@@ -71,10 +65,10 @@ TEST(KdTree, NearestWithinRespectsTheBound) {
 }
 
 TEST(KdTree, KnnMatchesBruteForce) {
-  const auto points = random_points(3000, 5);
+  const auto points = testing::uniform_points(3000, 5, -50.0, 50.0);
   KdTree tree(points);
   std::vector<Neighbor> got;
-  for (const auto& q : random_points(100, 6)) {
+  for (const auto& q : testing::uniform_points(100, 6, -50.0, 50.0)) {
     const auto expected = brute_force(points, q);
     tree.knn(q, 12, got);
     ASSERT_EQ(got.size(), 12u);
@@ -86,10 +80,10 @@ TEST(KdTree, KnnMatchesBruteForce) {
 }
 
 TEST(KdTree, RadiusMatchesBruteForceAndIsInclusive) {
-  const auto points = random_points(3000, 7);
+  const auto points = testing::uniform_points(3000, 7, -50.0, 50.0);
   KdTree tree(points);
   std::vector<Neighbor> got;
-  for (const auto& q : random_points(100, 8)) {
+  for (const auto& q : testing::uniform_points(100, 8, -50.0, 50.0)) {
     const auto all = brute_force(points, q);
     // Just past the 21st point: sqrt then squaring may round below its exact distance.
     const double r = std::sqrt(all[20].squared_distance) * (1.0 + 1e-12);
@@ -102,8 +96,8 @@ TEST(KdTree, RadiusMatchesBruteForceAndIsInclusive) {
 }
 
 TEST(KdTree, ConcurrentQueriesAgreeWithSerial) {
-  const auto points = random_points(20000, 9);
-  const auto queries = random_points(4000, 10);
+  const auto points = testing::uniform_points(20000, 9, -50.0, 50.0);
+  const auto queries = testing::uniform_points(4000, 10, -50.0, 50.0);
   KdTree tree(points);
   std::vector<std::uint32_t> serial(queries.size()), parallel(queries.size());
   for (std::size_t i = 0; i < queries.size(); ++i) serial[i] = tree.nearest(queries[i])->index;
@@ -119,7 +113,7 @@ TEST(KdTree, ConcurrentQueriesAgreeWithSerial) {
 }
 
 TEST(KdTree, SurvivesMove) {
-  KdTree a(random_points(100, 11));
+  KdTree a(testing::uniform_points(100, 11, -50.0, 50.0));
   KdTree b = std::move(a);
   EXPECT_EQ(b.size(), 100u);
   EXPECT_TRUE(b.nearest(Vec3::Zero()).has_value());

@@ -78,6 +78,16 @@ inline PointCloud sample_profile(const ProfileSpec& spec, std::size_t n, unsigne
   return cloud;
 }
 
+/// n points uniformly distributed in the cube [lo, hi)^3 (fixed seed).
+inline std::vector<Vec3> uniform_points(std::size_t n, unsigned seed, double lo = 0.0,
+                                        double hi = 100.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(lo, hi);
+  std::vector<Vec3> points(n);
+  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
+  return points;
+}
+
 /// A uniformly random rotation (normalised Gaussian quaternion) and a translation in a box.
 inline Transform random_motion(std::mt19937& rng, double max_translation_mm) {
   std::normal_distribution<double> g(0.0, 1.0);
