@@ -17,6 +17,8 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include "analysis/file_io.hpp"
+
 namespace springscan::daemon {
 
 namespace fs = std::filesystem;
@@ -79,33 +81,6 @@ void append_le(std::string& out, T value) {
 }
 
 }  // namespace
-
-Expected<bool> write_file_durably(const std::string& path, const std::string& bytes) {
-  const std::string temp = path + ".tmp";
-  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) return fail(system_error("cannot create", temp));
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const std::string error = system_error("cannot write", temp);
-      ::close(fd);
-      ::unlink(temp.c_str());
-      return fail(error + " (disk full?)");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  const bool synced = ::fsync(fd) == 0;
-  const std::string sync_error = synced ? "" : system_error("fsync failed for", temp);
-  ::close(fd);
-  if (!synced || ::rename(temp.c_str(), path.c_str()) != 0) {
-    const std::string error = synced ? system_error("cannot rename onto", path) : sync_error;
-    ::unlink(temp.c_str());
-    return fail(error);
-  }
-  return fsync_path(fs::path(path).parent_path().string(), O_RDONLY | O_DIRECTORY);
-}
 
 ReportStore::ReportStore(ReportStoreSettings settings) : settings_(std::move(settings)) {}
 
@@ -180,7 +155,7 @@ Expected<std::string> ReportStore::persist(std::uint64_t record,
   auto html = report::render_report_html(report, deviation_cloud ? *deviation_cloud : kNoCloud);
   if (html) files.emplace_back("report.html", std::move(*html));
   for (const auto& [name, bytes] : files) {
-    auto written = write_file_durably(temp + "/" + name, bytes);
+    auto written = analysis::write_file_atomically(temp + "/" + name, bytes);
     if (!written) return fail(written.message());
   }
   if (::rename(temp.c_str(), final_path.c_str()) != 0) {

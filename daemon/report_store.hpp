@@ -25,10 +25,6 @@ struct ReportStoreSettings {
   int retention = 1000;  ///< newest records kept; older ones are deleted after each persist
 };
 
-/// Writes `bytes` to `path` atomically: a temporary file beside it, fsync, rename, fsync of
-/// the directory. Errors name the path and the system error.
-analysis::Expected<bool> write_file_durably(const std::string& path, const std::string& bytes);
-
 class ReportStore {
  public:
   /// Creates the directory if needed, removes interrupted writes, finds the newest record.

@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <random>
 
+#include "analysis/file_io.hpp"
+
 namespace springscan::daemon {
 
 namespace {
@@ -54,7 +56,7 @@ std::uint16_t next_boot_id(const std::string& report_dir, Log& log) {
   std::uniform_int_distribution<int> pick(1, 65535);
   int id = pick(device);
   while (id == previous) id = pick(device);
-  auto written = write_file_durably(path, std::to_string(id) + "\n");
+  auto written = analysis::write_file_atomically(path, std::to_string(id) + "\n");
   if (!written) log.warning("cannot record BOOT_ID: " + written.message());
   return static_cast<std::uint16_t>(id);
 }

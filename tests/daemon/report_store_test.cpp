@@ -95,18 +95,5 @@ TEST(ReportStore, UnwritableDirectoryIsAnError) {
   EXPECT_NE(store.message().find("report_dir"), std::string::npos);
 }
 
-TEST(WriteFileDurably, ReplacesContentAtomically) {
-  TempDir dir("springscan-durable");
-  const std::string path = dir.str() + "/f.txt";
-  ASSERT_TRUE(write_file_durably(path, "one").ok());
-  ASSERT_TRUE(write_file_durably(path, "two").ok());
-  std::ifstream in(path);
-  std::string text;
-  in >> text;
-  EXPECT_EQ(text, "two");
-  EXPECT_FALSE(fs::exists(path + ".tmp"));
-  EXPECT_FALSE(write_file_durably(dir.str() + "/missing/f.txt", "x").ok());
-}
-
 }  // namespace
 }  // namespace springscan::daemon
