@@ -48,6 +48,20 @@ Expected<v1::InspectionReport> report_from_json(std::string_view json) {
   return report;
 }
 
+Expected<std::string> format_deviation_ply(const PointCloud& cloud, double scale_mm) {
+  Surface deviation;
+  deviation.cloud = cloud;
+  if (deviation.cloud.has_scalars()) {
+    deviation.cloud.colors.resize(deviation.cloud.scalars.size());
+    for (std::size_t i = 0; i < deviation.cloud.scalars.size(); ++i) {
+      deviation.cloud.colors[i] = deviation_color(deviation.cloud.scalars[i], scale_mm);
+    }
+  }
+  PointWriteOptions ply;
+  ply.scalar_name = "signed_deviation_mm";
+  return format_ply(deviation, ply);
+}
+
 Expected<bool> write_report_files(const std::string& dir, const InspectionOutcome& outcome) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
@@ -59,20 +73,10 @@ Expected<bool> write_report_files(const std::string& dir, const InspectionOutcom
     return written.error();
   }
 
-  Surface deviation;
-  deviation.cloud = outcome.deviation_cloud;
-  if (deviation.cloud.has_scalars()) {
-    const double scale_mm = deviation_color_scale_mm(outcome.report);
-    deviation.cloud.colors.resize(deviation.cloud.scalars.size());
-    for (std::size_t i = 0; i < deviation.cloud.scalars.size(); ++i) {
-      deviation.cloud.colors[i] = deviation_color(deviation.cloud.scalars[i], scale_mm);
-    }
-  }
-  PointWriteOptions ply;
-  ply.scalar_name = "signed_deviation_mm";
-  if (auto written = write_surface(join(dir, "deviation.ply"), deviation, ply); !written) {
-    return written.error();
-  }
+  const std::string ply_path = join(dir, "deviation.ply");
+  auto ply = format_deviation_ply(outcome.deviation_cloud, deviation_color_scale_mm(outcome.report));
+  if (!ply) return fail(ply_path + ": " + ply.message());
+  if (auto written = write_file_atomically(ply_path, *ply); !written) return written.error();
 
   // Last: a present report.pb means the other two files are complete (the daemon relies on it).
   std::string pb;

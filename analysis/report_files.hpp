@@ -32,6 +32,12 @@ Expected<std::string> report_to_json(const v1::InspectionReport& report);
 /// Parses report.json's text back (unknown fields are an error).
 Expected<v1::InspectionReport> report_from_json(std::string_view json);
 
+/// deviation.ply's bytes (binary PLY): the points of `cloud`, coloured by deviation_color at
+/// `scale_mm` when the cloud has scalars (the signed deviations, also written as the vertex
+/// property `signed_deviation_mm`), the points with the colours they have otherwise. The
+/// daemon's report store writes the same bytes.
+Expected<std::string> format_deviation_ply(const PointCloud& cloud, double scale_mm);
+
 /// Writes report.json, deviation.ply and report.pb into `dir` (created when missing), each
 /// atomically. deviation.ply holds outcome.deviation_cloud with colours from deviation_color at
 /// deviation_color_scale_mm(outcome.report) when the cloud has scalars (the signed deviations),

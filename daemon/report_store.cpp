@@ -1,23 +1,18 @@
 #include "daemon/report_store.hpp"
 
-#include "report/report_html.hpp"
-
 #include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <vector>
 
-#include <google/protobuf/util/json_util.h>
-
 #include "analysis/file_io.hpp"
+#include "analysis/report_files.hpp"
+#include "report/report_html.hpp"
 
 namespace springscan::daemon {
 
@@ -63,21 +58,6 @@ std::vector<std::uint64_t> list_records(const std::string& directory) {
   }
   std::sort(records.begin(), records.end());
   return records;
-}
-
-// Blue (-scale) -> white (0) -> red (+scale): the usual deviation colour map.
-analysis::Rgb deviation_color(double deviation, double scale) {
-  const double t = scale > 0.0 ? std::clamp(deviation / scale, -1.0, 1.0) : 0.0;
-  const auto fade = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - std::abs(t))));
-  if (t >= 0.0) return {255, fade, fade};
-  return {fade, fade, 255};
-}
-
-template <typename T>
-void append_le(std::string& out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));  // x86-64 and aarch64 are little-endian
-  out.append(bytes, sizeof(T));
 }
 
 }  // namespace
@@ -136,19 +116,16 @@ Expected<std::string> ReportStore::persist(std::uint64_t record,
   std::error_code ec;
   fs::remove_all(temp, ec);
   if (!fs::create_directory(temp, ec)) return fail("cannot create " + temp + ": " + ec.message());
-  std::string json;
-  google::protobuf::util::JsonPrintOptions options;
-  options.preserve_proto_field_names = true;
-  options.add_whitespace = true;
-  options.always_print_primitive_fields = true;  // verdict.pass = false must show (report-format.md)
-  if (!google::protobuf::util::MessageToJsonString(report, &json, options).ok()) {
-    return fail("report for record " + std::to_string(record) + ": JSON conversion failed");
-  }
+  // The same files as `springscan analyze` writes (analysis/report_files.hpp), plus report.html.
+  auto json = analysis::report_to_json(report);
+  if (!json) return fail("report for record " + std::to_string(record) + ": " + json.message());
   std::vector<std::pair<std::string, std::string>> files = {
-      {"report.pb", report.SerializeAsString()}, {"report.json", json}};
+      {"report.pb", report.SerializeAsString()}, {"report.json", std::move(*json)}};
   if (deviation_cloud != nullptr && !deviation_cloud->empty()) {
-    files.emplace_back("deviation.ply",
-                       deviation_ply(*deviation_cloud, report.deviation().color_scale_mm()));
+    auto ply = analysis::format_deviation_ply(*deviation_cloud,
+                                              analysis::deviation_color_scale_mm(report));
+    if (!ply) return fail("deviation.ply for record " + std::to_string(record) + ": " + ply.message());
+    files.emplace_back("deviation.ply", std::move(*ply));
   }
   // The page a quality engineer opens (issue 9); an empty cloud still renders, without pictures.
   static const analysis::PointCloud kNoCloud;
@@ -178,25 +155,6 @@ void ReportStore::apply_retention() {
   for (std::size_t i = 0; i + keep < records.size(); ++i) {
     fs::remove_all(record_path(records[i]), ec);
   }
-}
-
-std::string deviation_ply(const analysis::PointCloud& cloud, double color_scale_mm) {
-  std::ostringstream header;
-  header << "ply\nformat binary_little_endian 1.0\ncomment springscan deviation\n"
-         << "element vertex " << cloud.size() << "\n"
-         << "property float x\nproperty float y\nproperty float z\n"
-         << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-         << "property float deviation\nend_header\n";
-  std::string out = header.str();
-  out.reserve(out.size() + cloud.size() * 19);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const double d = cloud.has_scalars() ? cloud.scalars[i] : 0.0;
-    for (int k = 0; k < 3; ++k) append_le(out, static_cast<float>(cloud.points[i][k]));
-    const analysis::Rgb rgb = deviation_color(d, color_scale_mm);
-    for (std::uint8_t c : rgb) append_le(out, c);
-    append_le(out, static_cast<float>(d));
-  }
-  return out;
 }
 
 }  // namespace springscan::daemon

@@ -55,8 +55,4 @@ class ReportStore {
   std::uint64_t last_record_ = 0;
 };
 
-/// Serializes a cloud with per-point signed deviation as binary little-endian PLY: x y z
-/// (float), red green blue (uchar, blue-white-red over +-color_scale_mm), deviation (float).
-std::string deviation_ply(const analysis::PointCloud& cloud, double color_scale_mm);
-
 }  // namespace springscan::daemon

@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "analysis/point_io.hpp"
+#include "analysis/report_files.hpp"
 #include "test_rig.hpp"
 
 namespace springscan::daemon {
@@ -34,13 +36,17 @@ TEST(ReportStore, PersistsAllFilesAndReloadsTheNewest) {
   ASSERT_TRUE(store->persist(2, report_with_seq(2), nullptr).ok());
   EXPECT_TRUE(fs::exists(*path + "/report.pb"));
   EXPECT_TRUE(fs::exists(*path + "/report.json"));
-  // Binary PLY: header + 2 vertices of 3 floats, 3 bytes and 1 float.
-  const auto ply_size = fs::file_size(*path + "/deviation.ply");
-  std::ifstream ply(*path + "/deviation.ply");
-  std::string first;
-  std::getline(ply, first);
-  EXPECT_EQ(first, "ply");
-  EXPECT_GT(ply_size, 2u * 19u);
+  // The same deviation.ply as `springscan analyze` writes (docs/report-format.md): the points,
+  // the signed deviation as `signed_deviation_mm`, colours from analysis::deviation_color.
+  analysis::PointReadOptions by_name;
+  by_name.scalar_property = "signed_deviation_mm";
+  const auto ply = analysis::read_point_cloud(*path + "/deviation.ply", by_name);
+  ASSERT_TRUE(ply.ok()) << ply.message();
+  EXPECT_EQ(ply->points, cloud.points);
+  EXPECT_EQ(ply->scalars, cloud.scalars);
+  ASSERT_EQ(ply->colors.size(), 2u);
+  const double scale = analysis::deviation_color_scale_mm(report_with_seq(1));
+  EXPECT_EQ(ply->colors[1], analysis::deviation_color(-0.2, scale));
   std::ifstream json(*path + "/report.json");
   const std::string text((std::istreambuf_iterator<char>(json)), {});
   EXPECT_NE(text.find("\"result_seq\": 1"), std::string::npos);
