@@ -55,6 +55,7 @@ v1::CachedPartModel to_proto(const PartModel& model, const std::string& source_s
     set(m->mutable_point(), f.point);
     set(m->mutable_normal(), f.normal);
     m->set_area_mm2(f.area_mm2);
+    m->set_thickness_mm(f.thickness_mm);
   }
   for (const Bend& b : model.segmentation.bends) {
     auto* m = out.add_bends();
@@ -88,6 +89,7 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
     f.point = get(m.point());
     f.normal = get(m.normal());
     f.area_mm2 = m.area_mm2();
+    f.thickness_mm = m.thickness_mm();
     model.segmentation.flanges.push_back(std::move(f));
   }
   for (const auto& m : message.bends()) {

@@ -13,7 +13,7 @@
 namespace springscan::analysis {
 
 /// Bumped whenever the meaning of a cached field changes: older entries then miss.
-constexpr std::uint32_t kCachedPartModelVersion = 1;
+constexpr std::uint32_t kCachedPartModelVersion = 2;  // 2: flanges carry their thickness
 
 /// Samples, segmentation and face count (not the distance, not the BRep: the caller adds it).
 v1::CachedPartModel to_proto(const PartModel& model, const std::string& source_sha256,

@@ -141,6 +141,7 @@ FlangeTable find_flanges(const CadShape& shape, const std::vector<CadFaceInfo>& 
     flange.point = side.point;
     flange.normal = side.normal;
     flange.area_mm2 = side.area;
+    flange.thickness_mm = j >= 0 ? pair_thickness[i] : 0.0;
     for (int f : flange.face_ids) table.flange_of_face[static_cast<std::size_t>(f)] = flange.id;
     table.thickness_mm.push_back(j >= 0 ? pair_thickness[i] : 0.0);
     table.flanges.push_back(std::move(flange));

@@ -232,6 +232,20 @@ DeviationStatistics deviation_statistics(const std::vector<double>& d, double to
   return s;
 }
 
+double trimmed_rms(std::vector<double> values, double trimmed_fraction) {
+  if (values.empty()) return 0.0;
+  for (double& v : values) v = v * v;
+  const auto drop = static_cast<std::size_t>(std::clamp(trimmed_fraction, 0.0, 0.99) *
+                                             static_cast<double>(values.size()));
+  const auto keep = values.size() - drop;
+  if (drop > 0)
+    std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(keep - 1),
+                     values.end());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < keep; ++i) sum += values[i];
+  return std::sqrt(sum / static_cast<double>(keep));
+}
+
 Rgb deviation_color(double signed_distance_mm, double scale_mm) {
   const double t = scale_mm > 0.0 ? std::clamp(signed_distance_mm / scale_mm, -1.0, 1.0) : 0.0;
   const auto level = [](double x) { return static_cast<std::uint8_t>(std::lround(255.0 * x)); };

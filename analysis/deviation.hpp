@@ -57,6 +57,11 @@ std::vector<std::uint32_t> nearest_samples(const std::vector<Vec3>& points,
 DeviationStatistics deviation_statistics(const std::vector<double>& signed_distance_mm,
                                          double tolerance_mm);
 
+/// Root mean square of `values` over the smallest (1 - trimmed_fraction) of their magnitudes
+/// (outliers left out), mm; 0 for none. trimmed_fraction is clamped to [0, 0.99].
+/// Deterministic: the kept values are summed in a fixed order.
+double trimmed_rms(std::vector<double> values, double trimmed_fraction);
+
 /// The deviation.ply colour map: blue (-scale) .. green (0) .. red (+scale), linear, saturated.
 Rgb deviation_color(double signed_distance_mm, double scale_mm);
 

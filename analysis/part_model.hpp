@@ -18,6 +18,10 @@ struct Flange {
   Vec3 point = Vec3::Zero();   ///< a point on the plane (CAD frame, mm)
   Vec3 normal = Vec3::UnitZ(); ///< unit plane normal, along the faces' outward orientation
   double area_mm2 = 0.0;
+  /// Distance between the sheet's two sides when the flange has both (a solid); 0 for a
+  /// surface model. `point` and `normal` are those of one side: which one, a bend's geometry
+  /// tells (springback.cpp, concave_normal).
+  double thickness_mm = 0.0;
 };
 
 /// A bend: a cylindrical (or tangent-continuous curved) region joining two flanges.

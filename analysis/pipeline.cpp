@@ -221,6 +221,11 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
   if (!deviation) return fail(deviation.message());
   to_proto(*deviation, config->deviation, report.mutable_deviation());
+  // The fit's health figure: the distance of the scan to the surface after the fit, trimmed
+  // like ICP's pairs. rms_final (to the nearest model sample) grows with the sample spacing,
+  // and on a thick sheet the nearest sample may lie on the other side.
+  report.mutable_global_fit()->set_rms_residual(
+      trimmed_rms(deviation->signed_distance_mm, config->global_fit.icp.trimmed_fraction));
   out.deviation_cloud = deviation_cloud(std::move(scan_in_cad), *deviation,
                                         report.deviation().color_scale_mm());
   timings.set_deviation(ms_since(t));

@@ -151,6 +151,36 @@ double turn_deg(const Vec3& u, const Vec3& v, const Vec3& axis) {
   return std::atan2(sine, u.dot(v)) * kRadToDeg;
 }
 
+// The flange's normal on the concave side of `bend` (the side facing the bend's centre of
+// curvature), from where the flange's reference face lies relative to the bend axis: the
+// concave side's face has the axis in front of it at the inner radius Ri >= 0, the convex
+// side's face has it behind at Ri + t. The midway offset -t/2 decides, also for a sharp inner
+// corner (Ri = 0) and for a surface model (t = 0, where Ri > 0). Never decided from the angle:
+// at 90 degrees a normal and its opposite are equally near the nominal.
+Vec3 concave_normal(const Flange& flange, const Bend& bend) {
+  const Vec3 n = flange.normal.normalized();
+  const double axis_offset = (bend.axis_point - flange.point).dot(n);
+  return axis_offset >= -0.5 * flange.thickness_mm ? n : Vec3(-n);
+}
+
+// The direction about which the sheet turns from flange a into flange b, so that the bend's
+// turn is positive: the sheet leaves flange a towards the axis (in-plane, across the axis) and
+// curves towards its concave side. From positions, not from na x nb, which vanishes for a
+// closed hem (180 degrees) and would leave the sign of its springback to rounding.
+Vec3 turn_axis(const Flange& fa, const Vec3& concave_a, const Bend& bend) {
+  const Vec3 d = bend.axis_direction.normalized();
+  Vec3 towards = bend.axis_point - fa.point;
+  towards -= towards.dot(d) * d + towards.dot(concave_a) * concave_a;
+  const Vec3 w = towards.cross(concave_a);
+  return w.dot(d) < 0.0 ? Vec3(-d) : d;
+}
+
+// An angle difference in (-180, 180]: near 180 degrees a measured turn of -179.99 is 180.01,
+// so a closed hem that did not move has springback 0, not 359.99.
+double wrapped_deg(double a) { return std::remainder(a, 360.0); }
+
+}  // namespace
+
 BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
                              const FlangeFit& a, const FlangeFit& b, double tolerance_deg) {
   BendMeasurement m;
@@ -162,15 +192,10 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   m.radius_mm = bend.radius_mm;
   m.nominal_angle_deg = bend.nominal_angle_deg;
   m.angle_tolerance_deg = tolerance_deg;
-  // Normals of both flanges on the same side of the sheet; a CAD whose flange b normal points
-  // the other way shows the supplementary angle, so flip it to match the nominal angle.
-  Vec3 na = fa.normal.normalized(), nb = fb.normal.normalized();
-  const double between = std::atan2(na.cross(nb).norm(), na.dot(nb)) * kRadToDeg;
-  if (std::abs(180.0 - between - bend.nominal_angle_deg) <
-      std::abs(between - bend.nominal_angle_deg))
-    nb = -nb;
-  m.axis_direction = bend.axis_direction.normalized();
-  if (turn_deg(na, nb, m.axis_direction) < 0.0) m.axis_direction = -m.axis_direction;
+  // Both normals on the concave side of the sheet: the angle between them is the angle the
+  // sheet turns.
+  const Vec3 na = concave_normal(fa, bend), nb = concave_normal(fb, bend);
+  m.axis_direction = turn_axis(fa, na, bend);
   if (!a.fitted || !b.fitted) {
     m.status =
         "bend " + std::to_string(bend.id) + " not measured: " + (a.fitted ? b.status : a.status);
@@ -184,7 +209,7 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   const double nominal = turn_deg(na, nb, m.axis_direction);
   const double measured =
       measured_bend_angle_deg(na, nb, m.axis_direction, a.fit.T_model_subset, b.fit.T_model_subset);
-  m.springback_deg = nominal - measured;
+  m.springback_deg = wrapped_deg(nominal - measured);
   m.measured_angle_deg = m.nominal_angle_deg - m.springback_deg;
   const Vec3 line = a.measured_normal.cross(b.measured_normal);
   m.measured_axis_direction =
@@ -194,7 +219,6 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   return m;
 }
 
-}  // namespace
 
 double measured_bend_angle_deg(const Vec3& normal_a, const Vec3& normal_b, const Vec3& axis,
                                const Transform& T_model_a, const Transform& T_model_b) {

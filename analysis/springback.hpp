@@ -81,6 +81,15 @@ struct SpringbackResult {
 double measured_bend_angle_deg(const Vec3& normal_a, const Vec3& normal_b, const Vec3& axis,
                                const Transform& T_model_a, const Transform& T_model_b);
 
+/// One bend from the local fits of its flanges `a` (of flange `fa`) and `b` (of `fb`): the
+/// nominal turn between the flanges' normals taken on the bend's concave side (decided from
+/// where each flange's reference face lies relative to the bend axis, so either side of the
+/// sheet may be the reference), the measured turn after the relative rotation of the fits, and
+/// springback = nominal - measured wrapped into (-180, 180]. A flange not fitted leaves the
+/// bend unmeasured with a status. Pure function.
+BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
+                             const FlangeFit& a, const FlangeFit& b, double tolerance_deg);
+
 /// Measures every bend of `model.segmentation` in `scan_in_cad`. A flange with too few points
 /// (or a failed fit) leaves its bends unmeasured with a status; that is not an error.
 /// Errors: model samples without normals or face ids, a bend naming an unknown flange, or

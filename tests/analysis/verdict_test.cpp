@@ -18,6 +18,7 @@ v1::InspectionReport good_report() {
   d->set_max(0.42);
   d->set_p95(0.28);
   r.mutable_global_fit()->set_rms_final(0.12);
+  r.mutable_global_fit()->set_rms_residual(0.02);
   auto* field = r.mutable_deformation_field();
   field->set_method("min_cost_matching");
   field->set_model_points(594);
@@ -94,16 +95,25 @@ TEST(Verdict, SpringbackPerBend) {
 TEST(Verdict, AnalysisHealth) {
   auto r = good_report();
   r.mutable_deformation_field()->set_coverage(0.72);
-  r.mutable_global_fit()->set_rms_final(1.32);
+  r.mutable_global_fit()->set_rms_residual(1.32);
   const auto v = decide_verdict(r);
   EXPECT_FALSE(v.pass());
   ASSERT_EQ(v.reasons_size(), 2);
   EXPECT_EQ(v.reasons(0), "deformation field coverage 0.72 < minimum 0.90 (min_cost_matching)");
-  EXPECT_EQ(v.reasons(1), "global fit rms 1.32 mm > limit 1.00 mm: the analysis cannot be trusted");
+  EXPECT_EQ(v.reasons(1), "global fit residual rms 1.32 mm > limit 1.00 mm: the analysis cannot be trusted");
   // No field computed: coverage is not judged.
   r = good_report();
   r.mutable_deformation_field()->set_model_points(0);
   r.mutable_deformation_field()->set_coverage(0.0);
+  EXPECT_TRUE(decide_verdict(r).pass());
+}
+
+// The distance to the nearest model sample grows with the part's area (sparser samples); it
+// must not fail a well-fitted part: only the residual to the surface judges the fit.
+TEST(Verdict, FitHealthIgnoresTheSampleSpacing) {
+  auto r = good_report();
+  r.mutable_global_fit()->set_rms_final(1.37);
+  r.mutable_global_fit()->set_rms_residual(0.03);
   EXPECT_TRUE(decide_verdict(r).pass());
 }
 
@@ -112,7 +122,7 @@ TEST(Verdict, EveryFailingRuleIsListed) {
   r.mutable_deviation()->set_p95(0.9);
   r.mutable_bends(0)->set_springback_deg(1.5);
   r.mutable_bends(1)->set_measured(false);
-  r.mutable_global_fit()->set_rms_final(2.0);
+  r.mutable_global_fit()->set_rms_residual(2.0);
   r.mutable_deformation_field()->set_coverage(0.5);
   const auto v = decide_verdict(r);
   EXPECT_FALSE(v.pass());
