@@ -6,13 +6,14 @@
 #include <filesystem>
 #include <random>
 
-#include "analysis/cad_distance.hpp"
-#include "analysis/cad_profile.hpp"
-#include "analysis/cad_sampling.hpp"
+#include "analysis/cad/distance.hpp"
+#include "simulators/parts/cad_profile.hpp"
+#include "analysis/cad/sampling.hpp"
 
 namespace {
 
 using namespace springscan::analysis;
+using namespace springscan::parts;
 
 ProfileSpec fifty_face_profile() {
   ProfileSpec spec;

@@ -2,7 +2,7 @@
 // against the naive O(n k) loop; both must select exactly the same centers.
 #include <benchmark/benchmark.h>
 
-#include "analysis/kcenter.hpp"
+#include "analysis/preprocess/kcenter.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {

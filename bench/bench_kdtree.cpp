@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "analysis/kdtree.hpp"
+#include "analysis/core/kdtree.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {

@@ -16,9 +16,9 @@
 #include <random>
 #include <string>
 
-#include "analysis/assignment_points.hpp"
-#include "analysis/kcenter.hpp"
-#include "analysis/sheet_profile.hpp"
+#include "analysis/matching/assignment_points.hpp"
+#include "analysis/preprocess/kcenter.hpp"
+#include "simulators/parts/sheet_profile.hpp"
 #include "tests/analysis/profile_sampling.hpp"
 #include "tests/analysis/synthetic.hpp"
 

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <random>
 
-#include "analysis/file_io.hpp"
-#include "analysis/point_io.hpp"
+#include "analysis/io/file_io.hpp"
+#include "analysis/io/point_io.hpp"
 
 namespace {
 

@@ -9,8 +9,8 @@
 #include <random>
 #include <string>
 
-#include "analysis/pipeline.hpp"
-#include "analysis/point_io.hpp"
+#include "analysis/inspection/pipeline.hpp"
+#include "analysis/io/point_io.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {

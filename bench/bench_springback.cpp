@@ -7,12 +7,13 @@
 #include <memory>
 #include <numbers>
 
-#include "analysis/sheet_part.hpp"
-#include "analysis/springback.hpp"
+#include "simulators/parts/sheet_part.hpp"
+#include "analysis/springback/springback.hpp"
 
 namespace {
 
 using namespace springscan::analysis;
+using namespace springscan::parts;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 const std::vector<double> kSpringbackDeg = {1.2, 2.0, -0.4, 1.6};

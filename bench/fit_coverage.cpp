@@ -11,9 +11,9 @@
 #include <random>
 #include <string>
 
-#include "analysis/global_fit.hpp"
-#include "analysis/reduction.hpp"
-#include "analysis/voxel.hpp"
+#include "analysis/registration/global_fit.hpp"
+#include "analysis/preprocess/reduction.hpp"
+#include "analysis/preprocess/voxel.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {

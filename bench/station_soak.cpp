@@ -23,7 +23,7 @@
 #include <thread>
 #include <vector>
 
-#include "analysis/sheet_part.hpp"
+#include "simulators/parts/sheet_part.hpp"
 #include "proto/springscan.pb.h"
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
@@ -124,12 +124,12 @@ Options parse(int argc, char** argv) {
 
 /// The demo hat as produced (springback 1.5, 0.8, 1.1, 0.4 deg; demo/README.md).
 analysis::Expected<analysis::PointCloud> demo_surface(long points) {
-  analysis::ProfileSpec spec = analysis::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
+  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
   spec.width_mm = 80.0;
-  analysis::ScanSimulationSettings dense;
+  parts::ScanSimulationSettings dense;
   dense.point_count = points;
   dense.noise_sigma_mm = 0.0;
-  return analysis::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
+  return parts::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
 }
 
 }  // namespace

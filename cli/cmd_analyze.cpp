@@ -8,14 +8,14 @@
 #include <filesystem>
 #include <string>
 
-#include "analysis/cad_model.hpp"
-#include "analysis/cad_model_proto.hpp"
-#include "analysis/file_io.hpp"
-#include "analysis/pipeline.hpp"
-#include "analysis/point_io.hpp"
-#include "analysis/point_model.hpp"
-#include "analysis/report_files.hpp"
-#include "analysis/sha256.hpp"
+#include "analysis/cad/model.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
+#include "analysis/io/file_io.hpp"
+#include "analysis/inspection/pipeline.hpp"
+#include "analysis/io/point_io.hpp"
+#include "analysis/cad/point_model.hpp"
+#include "report/inspection_files.hpp"
+#include "analysis/io/sha256.hpp"
 #include "cli/cli_common.hpp"
 #include "report/report_html.hpp"
 
@@ -56,7 +56,7 @@ analysis::Expected<v1::AnalysisSettings> read_settings(const std::string& path) 
 }
 
 // The CAD side: import, healing, even samples, segmentation into flanges and bends, and the
-// exact surface distance (analysis/cad_model.hpp).
+// exact surface distance (analysis/cad/model.hpp).
 analysis::Expected<analysis::PartModel> load_cad_model(const std::string& path,
                                                        const v1::ModelSettings& m) {
   auto settings = analysis::from_proto(m);
@@ -168,7 +168,7 @@ int analyze_main(int argc, char** argv) {
   std::error_code ec;
   std::filesystem::create_directories(args.get("out"), ec);
   if (ec) return fail_with(kName, args.get("out") + ": cannot create: " + ec.message(), kExitUsage);
-  auto written = analysis::write_report_files(args.get("out"), *outcome);
+  auto written = report::write_inspection_files(args.get("out"), *outcome);
   if (!written) return fail_with(kName, written.message(), kExitUsage);
   auto html = report::write_report_html_in_dir(args.get("out"), report, outcome->deviation_cloud);
   if (!html) log.warning("report.html not written: " + html.message());

@@ -1,6 +1,6 @@
 // springscan convert IN OUT [--ascii] [--single-precision]: any point or mesh format we read to
-// any we write, chosen by the file extensions (analysis/point_io.hpp).
-#include "analysis/point_io.hpp"
+// any we write, chosen by the file extensions (analysis/io/point_io.hpp).
+#include "analysis/io/point_io.hpp"
 #include "cli/cli_common.hpp"
 
 namespace springscan::cli {

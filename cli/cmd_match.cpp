@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/deformation_field.hpp"
-#include "analysis/file_io.hpp"
-#include "analysis/kcenter.hpp"
-#include "analysis/point_io.hpp"
+#include "analysis/matching/deformation_field.hpp"
+#include "analysis/io/file_io.hpp"
+#include "analysis/preprocess/kcenter.hpp"
+#include "analysis/io/point_io.hpp"
 #include "cli/cli_common.hpp"
 
 namespace springscan::cli {

@@ -5,8 +5,8 @@
 #include <sstream>
 #include <string>
 
-#include "analysis/cad_import.hpp"
-#include "analysis/cad_segmentation.hpp"
+#include "analysis/cad/import.hpp"
+#include "analysis/cad/segmentation.hpp"
 #include "cli/cli_common.hpp"
 
 namespace springscan::cli {

@@ -3,8 +3,8 @@
 
 #include <filesystem>
 
-#include "analysis/file_io.hpp"
-#include "analysis/point_io.hpp"
+#include "analysis/io/file_io.hpp"
+#include "analysis/io/point_io.hpp"
 #include "cli/cli_common.hpp"
 #include "report/report_html.hpp"
 

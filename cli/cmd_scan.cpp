@@ -7,7 +7,7 @@
 #include <sstream>
 #include <string>
 
-#include "analysis/point_io.hpp"
+#include "analysis/io/point_io.hpp"
 #include "cli/cli_common.hpp"
 #include "drivers/scanner_proto.hpp"
 

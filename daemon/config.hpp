@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "daemon/log.hpp"
 #include "daemon/station.hpp"
 #include "proto/springscan.pb.h"

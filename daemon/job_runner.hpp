@@ -18,8 +18,8 @@
 #include <thread>
 #include <vector>
 
-#include "analysis/expected.hpp"
-#include "analysis/pipeline.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/inspection/pipeline.hpp"
 #include "daemon/log.hpp"
 #include "daemon/report_store.hpp"
 #include "daemon/result_block.hpp"

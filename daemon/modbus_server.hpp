@@ -20,7 +20,7 @@
 
 #include <modbus/modbus.h>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "daemon/log.hpp"
 #include "daemon/request_check.hpp"
 

@@ -10,8 +10,8 @@
 #include <fstream>
 #include <vector>
 
-#include "analysis/file_io.hpp"
-#include "analysis/report_files.hpp"
+#include "analysis/io/file_io.hpp"
+#include "report/inspection_files.hpp"
 #include "report/report_html.hpp"
 
 namespace springscan::daemon {
@@ -116,14 +116,14 @@ Expected<std::string> ReportStore::persist(std::uint64_t record,
   std::error_code ec;
   fs::remove_all(temp, ec);
   if (!fs::create_directory(temp, ec)) return fail("cannot create " + temp + ": " + ec.message());
-  // The same files as `springscan analyze` writes (analysis/report_files.hpp), plus report.html.
-  auto json = analysis::report_to_json(report);
+  // The same files as `springscan analyze` writes (report/inspection_files.hpp), plus report.html.
+  auto json = report::report_to_json(report);
   if (!json) return fail("report for record " + std::to_string(record) + ": " + json.message());
   std::vector<std::pair<std::string, std::string>> files = {
       {"report.pb", report.SerializeAsString()}, {"report.json", std::move(*json)}};
   if (deviation_cloud != nullptr && !deviation_cloud->empty()) {
-    auto ply = analysis::format_deviation_ply(*deviation_cloud,
-                                              analysis::deviation_color_scale_mm(report));
+    auto ply = report::format_deviation_ply(*deviation_cloud,
+                                              report::deviation_color_scale_mm(report));
     if (!ply) return fail("deviation.ply for record " + std::to_string(record) + ": " + ply.message());
     files.emplace_back("deviation.ply", std::move(*ply));
   }

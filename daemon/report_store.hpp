@@ -14,8 +14,8 @@
 #include <optional>
 #include <string>
 
-#include "analysis/expected.hpp"
-#include "analysis/pipeline.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/inspection/pipeline.hpp"
 #include "proto/springscan.pb.h"
 
 namespace springscan::daemon {

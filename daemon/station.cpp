@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <random>
 
-#include "analysis/file_io.hpp"
+#include "analysis/io/file_io.hpp"
 
 namespace springscan::daemon {
 

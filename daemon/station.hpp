@@ -10,7 +10,7 @@
 #include <memory>
 #include <string>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "daemon/job_runner.hpp"
 #include "daemon/log.hpp"
 #include "daemon/modbus_server.hpp"

@@ -4,9 +4,9 @@
 #include <memory>
 #include <mutex>
 
-#include "analysis/cad_model.hpp"
-#include "analysis/cad_model_proto.hpp"
-#include "analysis/pipeline.hpp"
+#include "analysis/cad/model.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
+#include "analysis/inspection/pipeline.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/protocol.hpp"
 #include "drivers/tactile_scanner.hpp"
@@ -29,7 +29,7 @@ drivers::LinkSettings link_settings(const v1::ScannerConfig& config, std::uint16
 /// The CAD model of each part, loaded on first use (on the runner's thread) and kept: import,
 /// even samples with exact normals, the segmentation into flanges and bends, and the exact
 /// point-to-surface distance (DESIGN.md stages 1-2). Models go through the on-disk cache
-/// (analysis/cad_model.hpp), so a restarted daemon skips IGES/STEP parsing and healing.
+/// (analysis/cad/model.hpp), so a restarted daemon skips IGES/STEP parsing and healing.
 class PartModels {
  public:
   PartModels(const std::vector<PartEntry>& parts, std::string cache_dir, Log& log)

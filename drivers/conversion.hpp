@@ -6,7 +6,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "drivers/messages.hpp"
 
 namespace springscan::drivers {

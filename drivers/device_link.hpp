@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "drivers/codec.hpp"
 #include "drivers/messages.hpp"
 #include "drivers/scanner.hpp"

@@ -7,8 +7,8 @@
 #include <functional>
 #include <string>
 
-#include "analysis/expected.hpp"
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 
 namespace springscan::drivers {
 

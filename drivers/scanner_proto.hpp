@@ -5,7 +5,7 @@
 
 #include <memory>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/tactile_scanner.hpp"
 #include "proto/springscan.pb.h"

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "drivers/protocol.hpp"
 
 namespace springscan::drivers {

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/point_cloud.hpp"
 
 namespace springscan::report {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/expected.hpp"
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "proto/springscan.pb.h"
 #include "report/png.hpp"
 #include "report/report_settings.hpp"

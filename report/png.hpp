@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/expected.hpp"
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 
 namespace springscan::report {
 

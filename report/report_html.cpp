@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "analysis/file_io.hpp"
+#include "analysis/io/file_io.hpp"
 #include "report/figures.hpp"
 #include "report/html_text.hpp"
 #include "report/plots.hpp"
@@ -21,7 +21,7 @@ double tolerance_of(const v1::InspectionReport& report) {
 }
 
 // |deviation| drawn full blue or red: the setting, else the rule deviation.ply is coloured
-// by (analysis/report_files.hpp deviation_color_scale_mm: the report's color_scale_mm, else
+// by (report/inspection_files.hpp deviation_color_scale_mm: the report's color_scale_mm, else
 // 3 x tolerance, else 1 mm), so the page and the PLY agree.
 double color_scale_of(const v1::InspectionReport& report, const ReportSettings& settings) {
   if (settings.color_scale_mm > 0 && std::isfinite(settings.color_scale_mm))

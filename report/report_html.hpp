@@ -8,8 +8,8 @@
 #include <filesystem>
 #include <string>
 
-#include "analysis/expected.hpp"
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "proto/springscan.pb.h"
 #include "report/report_settings.hpp"
 

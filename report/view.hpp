@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/point_cloud.hpp"
 
 namespace springscan::report {
 

@@ -10,13 +10,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/cad_profile.hpp"
-#include "analysis/point_io.hpp"
-#include "analysis/sheet_part.hpp"
+#include "simulators/parts/cad_profile.hpp"
+#include "analysis/io/point_io.hpp"
+#include "simulators/parts/sheet_part.hpp"
 
 namespace {
 
 using namespace springscan::analysis;
+using namespace springscan::parts;
 
 struct DemoOptions {
   std::string out_dir = "demo";

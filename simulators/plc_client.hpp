@@ -13,7 +13,7 @@
 
 #include <modbus/modbus.h>
 
-#include "analysis/expected.hpp"
+#include "analysis/core/expected.hpp"
 #include "daemon/register_map.hpp"
 
 namespace springscan::simulators {

@@ -9,7 +9,7 @@
 #include <random>
 #include <vector>
 
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "drivers/conversion.hpp"
 #include "drivers/messages.hpp"
 

@@ -4,10 +4,11 @@
 #include <map>
 #include <sstream>
 
-#include "analysis/point_io.hpp"
-#include "analysis/sheet_part.hpp"
+#include "analysis/io/point_io.hpp"
+#include "simulators/parts/sheet_part.hpp"
 
 namespace springscan::simulators {
+using namespace springscan::parts;  // test and demo parts (simulators/parts)
 namespace {
 
 using analysis::fail;
@@ -123,25 +124,25 @@ analysis::Expected<SimOptions> parse_sim_options(int argc, char** argv) {
 
 analysis::Expected<analysis::PointCloud> load_part_surface(const SimOptions& o) {
   if (!o.part_path.empty()) return analysis::read_point_cloud(o.part_path);
-  analysis::ProfileSpec nominal;
+  parts::ProfileSpec nominal;
   if (o.profile == "hat") {
-    nominal = analysis::hat_profile(15, 20, 30, 45, 3);
+    nominal = parts::hat_profile(15, 20, 30, 45, 3);
   } else if (o.profile == "l") {
-    nominal = analysis::l_profile(40, 30, 90, 3);
+    nominal = parts::l_profile(40, 30, 90, 3);
   } else if (o.profile == "u") {
-    nominal = analysis::u_profile(20, 40, 90, 3);
+    nominal = parts::u_profile(20, 40, 90, 3);
   } else if (o.profile == "z") {
-    nominal = analysis::z_profile(25, 30, 90, 3);
+    nominal = parts::z_profile(25, 30, 90, 3);
   } else {
     return fail("--profile " + o.profile + ": hat, l, u or z");
   }
   std::vector<double> springback = o.springback_deg;
   if (springback.empty()) springback.assign(nominal.bend_angles_deg.size(), 0.0);
   if (springback.size() == 1) springback.assign(nominal.bend_angles_deg.size(), springback[0]);
-  analysis::ScanSimulationSettings dense;
+  parts::ScanSimulationSettings dense;
   dense.point_count = o.surface_points;
   dense.noise_sigma_mm = 0.0;  // the device adds its own noise along its measuring direction
-  return analysis::simulate_scan(nominal, springback, dense);
+  return parts::simulate_scan(nominal, springback, dense);
 }
 
 }  // namespace springscan::simulators

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/expected.hpp"
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "simulators/scanner_device.hpp"
 
 namespace springscan::simulators {
@@ -27,7 +27,7 @@ analysis::Expected<SimOptions> parse_sim_options(int argc, char** argv);
 /// The --help text.
 std::string sim_usage();
 /// The dense surface cloud of the part: the --part file, or the analytic --profile bent by
-/// --springback (analysis/sheet_part.hpp).
+/// --springback (simulators/parts/sheet_part.hpp).
 analysis::Expected<analysis::PointCloud> load_part_surface(const SimOptions& options);
 
 }  // namespace springscan::simulators

@@ -18,8 +18,8 @@
 #include <memory>
 #include <string>
 
-#include "analysis/expected.hpp"
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "simulators/scanner_device.hpp"
 
 namespace springscan::simulators {

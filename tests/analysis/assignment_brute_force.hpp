@@ -7,7 +7,7 @@
 #include <numeric>
 #include <vector>
 
-#include "analysis/assignment.hpp"
+#include "analysis/matching/assignment.hpp"
 
 namespace springscan::analysis::testing {
 

@@ -1,6 +1,6 @@
 #pragma once
 // Test and benchmark helper: even samples of a sheet profile's reference surface
-// (analysis/sheet_profile.hpp), with the path position of every sample, so tests know which
+// (simulators/parts/sheet_profile.hpp), with the path position of every sample, so tests know which
 // samples lie on the free edges of the sheet and which on a bend.
 
 #include <algorithm>
@@ -8,7 +8,12 @@
 #include <cstddef>
 #include <vector>
 
-#include "analysis/sheet_profile.hpp"
+#include "simulators/parts/sheet_profile.hpp"
+
+// The analysis tests build their parts with simulators/parts.
+namespace springscan::analysis {
+using namespace springscan::parts;
+}  // namespace springscan::analysis
 
 namespace springscan::analysis::testing {
 

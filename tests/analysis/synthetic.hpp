@@ -7,8 +7,13 @@
 #include <random>
 #include <vector>
 
-#include "analysis/point_cloud.hpp"
-#include "analysis/sheet_profile.hpp"
+#include "analysis/core/point_cloud.hpp"
+#include "simulators/parts/sheet_profile.hpp"
+
+// The analysis tests build their parts with simulators/parts.
+namespace springscan::analysis {
+using namespace springscan::parts;
+}  // namespace springscan::analysis
 
 namespace springscan::analysis::testing {
 

@@ -21,7 +21,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/sheet_part.hpp"
+#include "simulators/parts/sheet_part.hpp"
 #include "daemon/register_map.hpp"
 #include "daemon_process.hpp"
 #include "proto/springscan.pb.h"
@@ -30,10 +30,11 @@
 #include "test_rig.hpp"
 
 namespace springscan::daemon::testing {
+using namespace springscan::parts;  // test and demo parts (simulators/parts)
 
 /// The demo hat profile of simulators/demo_part_main.cpp (the shape of demo/hat-profile.step).
-inline analysis::ProfileSpec demo_hat() {
-  analysis::ProfileSpec spec = analysis::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
+inline parts::ProfileSpec demo_hat() {
+  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
   spec.width_mm = 80.0;
   return spec;
 }
@@ -81,10 +82,10 @@ class HilTest : public ::testing::Test {
     s.config.points_per_profile = 200;
     s.scan_duration_s = d.scan_duration_s;
     s.faults = d.faults;
-    analysis::ScanSimulationSettings dense;  // the part's surface, densely and noise-free
+    parts::ScanSimulationSettings dense;  // the part's surface, densely and noise-free
     dense.point_count = 150000;
     dense.noise_sigma_mm = 0.0;
-    auto surface = analysis::simulate_scan(demo_hat(), springback_deg, dense);
+    auto surface = parts::simulate_scan(demo_hat(), springback_deg, dense);
     ASSERT_TRUE(surface.ok()) << surface.message();
     auto emulator = simulators::EmulatedUsbScanner::create(s, std::move(*surface));
     ASSERT_TRUE(emulator.ok()) << emulator.message();
@@ -145,7 +146,7 @@ class HilTest : public ::testing::Test {
   /// report's bend. The report numbers bends as the CAD segmentation found them, so the bend
   /// is matched by its axis to the nearest bend axis of the exact nominal model.
   static int path_index(const v1::Bend& bend) {
-    static const auto nominal = analysis::profile_part_model(demo_hat(), {2000});
+    static const auto nominal = parts::profile_part_model(demo_hat(), {2000});
     if (!nominal.ok()) return -1;
     const analysis::Vec3 p(bend.axis_point().x(), bend.axis_point().y(), bend.axis_point().z());
     int best = -1;

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "analysis/point_io.hpp"
-#include "analysis/report_files.hpp"
+#include "analysis/io/point_io.hpp"
+#include "report/inspection_files.hpp"
 #include "test_rig.hpp"
 
 namespace springscan::daemon {
@@ -45,7 +45,7 @@ TEST(ReportStore, PersistsAllFilesAndReloadsTheNewest) {
   EXPECT_EQ(ply->points, cloud.points);
   EXPECT_EQ(ply->scalars, cloud.scalars);
   ASSERT_EQ(ply->colors.size(), 2u);
-  const double scale = analysis::deviation_color_scale_mm(report_with_seq(1));
+  const double scale = report::deviation_color_scale_mm(report_with_seq(1));
   EXPECT_EQ(ply->colors[1], analysis::deviation_color(-0.2, scale));
   std::ifstream json(*path + "/report.json");
   const std::string text((std::istreambuf_iterator<char>(json)), {});

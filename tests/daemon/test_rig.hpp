@@ -14,7 +14,7 @@
 
 #include <unistd.h>
 
-#include "analysis/pipeline.hpp"
+#include "analysis/inspection/pipeline.hpp"
 #include "drivers/scanner.hpp"
 
 namespace springscan::daemon::testing {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <memory>
 
-#include "analysis/sheet_part.hpp"
+#include "simulators/parts/sheet_part.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/tactile_scanner.hpp"
 #include "simulators/usb_emulator.hpp"
@@ -15,7 +15,7 @@ namespace springscan {
 namespace {
 
 using analysis::PointCloud;
-using analysis::ProfileSpec;
+using parts::ProfileSpec;
 using drivers::LaserLineScanner;
 using drivers::TactileProbeScanner;
 using simulators::EmulatedUsbScanner;
@@ -30,14 +30,14 @@ struct Part {
 
 const Part& part() {
   static const Part p = [] {
-    const ProfileSpec nominal = analysis::hat_profile(15, 20, 30, 45, 3);
+    const ProfileSpec nominal = parts::hat_profile(15, 20, 30, 45, 3);
     const std::vector<double> springback = {1.5, 1.5, 1.5, 1.5};
     Part out;
-    out.produced = *analysis::produced_profile(nominal, springback);
-    analysis::ScanSimulationSettings dense;
+    out.produced = *parts::produced_profile(nominal, springback);
+    parts::ScanSimulationSettings dense;
     dense.point_count = 120000;
     dense.noise_sigma_mm = 0.0;
-    out.surface = *analysis::simulate_scan(nominal, springback, dense);
+    out.surface = *parts::simulate_scan(nominal, springback, dense);
     return out;
   }();
   return p;
@@ -84,7 +84,7 @@ struct Fit {
   double max = 0.0;
 };
 Fit fit_to_part(const PointCloud& cloud) {
-  const auto distance = analysis::profile_surface_distance(part().produced);
+  const auto distance = parts::profile_surface_distance(part().produced);
   Fit f;
   for (const auto& q : cloud.points) {
     const double d = std::abs(distance->closest(q).signed_distance_mm);

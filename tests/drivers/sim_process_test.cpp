@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "analysis/point_io.hpp"
-#include "analysis/sheet_part.hpp"
+#include "analysis/io/point_io.hpp"
+#include "simulators/parts/sheet_part.hpp"
 
 namespace springscan {
 namespace {
@@ -35,9 +35,9 @@ TEST(ScannerSimProcess, CliLaserScanThroughTheEmulatedDeviceMatchesThePart) {
   EXPECT_GT(cloud->size(), 3000u);
   // The simulator's part: the hat profile with 2 degrees of springback at every bend.
   const auto produced =
-      analysis::produced_profile(analysis::hat_profile(15, 20, 30, 45, 3), {2, 2, 2, 2});
+      parts::produced_profile(parts::hat_profile(15, 20, 30, 45, 3), {2, 2, 2, 2});
   ASSERT_TRUE(produced.ok());
-  const auto distance = analysis::profile_surface_distance(*produced);
+  const auto distance = parts::profile_surface_distance(*produced);
   double sum = 0.0;
   for (const auto& q : cloud->points) sum += std::pow(distance->closest(q).signed_distance_mm, 2);
   EXPECT_LT(std::sqrt(sum / double(cloud->size())), 0.03);

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "analysis/point_io.hpp"
+#include "analysis/io/point_io.hpp"
 #include "tests/report/report_fixture.hpp"
 
 namespace springscan::report {

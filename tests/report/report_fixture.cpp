@@ -5,12 +5,13 @@
 #include <numbers>
 #include <random>
 
-#include "analysis/sheet_profile.hpp"
+#include "simulators/parts/sheet_profile.hpp"
 
 namespace springscan::report::testing {
+using namespace springscan::parts;  // test and demo parts (simulators/parts)
 namespace {
 
-using analysis::ProfileElement;
+using parts::ProfileElement;
 using analysis::Vec3;
 
 constexpr double kWidthMm = 80.0;
@@ -74,7 +75,7 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
     auto* b = r.add_bends();
     const int i = e.bend_index;
     b->set_id(i + 1);
-    *b->mutable_axis_point() = vec(analysis::profile_to_3d(e.center, 0.5 * kWidthMm));
+    *b->mutable_axis_point() = vec(parts::profile_to_3d(e.center, 0.5 * kWidthMm));
     *b->mutable_axis_direction() = vec(Vec3::UnitY());
     b->set_radius_mm(e.radius_mm);
     b->set_nominal_angle_deg(std::abs(e.sweep_rad) * 180.0 / std::numbers::pi);
@@ -99,8 +100,8 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
     const auto [p, n] = at_length(path, s);
     const double dev = 0.6 * std::sin(2 * std::numbers::pi * s / total_mm);
     auto* c = r.add_compensation();
-    *c->mutable_point() = vec(analysis::profile_to_3d(p, 0.5 * kWidthMm));
-    *c->mutable_vector() = vec(-dev * analysis::profile_to_3d(n, 0.0));
+    *c->mutable_point() = vec(parts::profile_to_3d(p, 0.5 * kWidthMm));
+    *c->mutable_vector() = vec(-dev * parts::profile_to_3d(n, 0.0));
   }
   r.mutable_timings_ms()->set_total(812.0);
   r.mutable_timings_ms()->set_global_fit(301.5);
@@ -111,7 +112,7 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
 
 Fixture make_fixture(std::size_t points) {
   Fixture f;
-  const auto path = analysis::profile_path(analysis::hat_profile(30, 40, 50, 90, 4));
+  const auto path = parts::profile_path(parts::hat_profile(30, 40, 50, 90, 4));
   double total = 0.0;
   for (const auto& e : path) total += e.length_mm();
   std::mt19937 rng(7);
@@ -125,7 +126,7 @@ Fixture make_fixture(std::size_t points) {
     const double s = along(rng), y = across(rng);
     const auto [p, n] = at_length(path, s);
     const double dev = 0.6 * std::sin(2 * std::numbers::pi * s / total) + noise(rng);
-    f.cloud.points.push_back(analysis::profile_to_3d(p + dev * n, y));
+    f.cloud.points.push_back(parts::profile_to_3d(p + dev * n, y));
     f.cloud.scalars.push_back(dev);
     lo = std::min(lo, dev);
     hi = std::max(hi, dev);

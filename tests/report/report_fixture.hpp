@@ -1,12 +1,12 @@
 #pragma once
 // A synthetic inspection with known geometry, shared by the report tests and bench_report: a
-// hat profile (analysis/sheet_profile.hpp) sampled with a smooth deviation field along the
+// hat profile (simulators/parts/sheet_profile.hpp) sampled with a smooth deviation field along the
 // profile, and a report whose bends, segments, fit history and compensation vectors follow
 // from it. Fixed seeds.
 
 #include <cstddef>
 
-#include "analysis/point_cloud.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "proto/springscan.pb.h"
 
 namespace springscan::report::testing {

@@ -1,0 +1,207 @@
+#include "analysis/core/kdtree.hpp"
+
+#include <nanoflann.hpp>
+
+#include <cmath>
+
+#include <array>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace springscan::analysis {
+namespace {
+
+// nanoflann's dataset contract: count, coordinate access, and no precomputed bounding box.
+struct PointsAdaptor {
+  const std::vector<Vec3>* points;
+  std::size_t kdtree_get_point_count() const { return points->size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return (*points)[i][dim]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+using Index = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<double, PointsAdaptor, double, std::uint32_t>, PointsAdaptor, 3,
+    std::uint32_t>;
+
+// A result set that keeps only the single closest point below an initial bound, so that
+// nearest-within-distance prunes the search from the start.
+class NearestWithin {
+ public:
+  explicit NearestWithin(double max_squared_distance) : best_(max_squared_distance) {}
+  bool addPoint(double squared_distance, std::uint32_t index) {
+    if (squared_distance < best_) {
+      best_ = squared_distance;
+      index_ = index;
+      found_ = true;
+    }
+    return true;
+  }
+  double worstDist() const { return best_; }
+  bool full() const { return true; }
+  bool found() const { return found_; }
+  Neighbor neighbor() const { return {index_, best_}; }
+
+ private:
+  double best_;
+  std::uint32_t index_ = 0;
+  bool found_ = false;
+};
+
+}  // namespace
+
+struct KdTree::Impl {
+  Impl(std::vector<Vec3> pts, const KdTreeSettings& settings)
+      : points(std::move(pts)),
+        adaptor{&points},
+        index(3, adaptor,
+              nanoflann::KDTreeSingleIndexAdaptorParams(
+                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {}
+  std::vector<Vec3> points;
+  PointsAdaptor adaptor;
+  Index index;
+};
+
+KdTree::KdTree(std::vector<Vec3> points, const KdTreeSettings& settings)
+    : impl_(std::make_unique<Impl>(std::move(points), settings)) {}
+KdTree::~KdTree() = default;
+KdTree::KdTree(KdTree&&) noexcept = default;
+KdTree& KdTree::operator=(KdTree&&) noexcept = default;
+
+std::size_t KdTree::size() const { return impl_->points.size(); }
+const std::vector<Vec3>& KdTree::points() const { return impl_->points; }
+
+std::optional<Neighbor> KdTree::nearest(const Vec3& query, double max_distance) const {
+  if (empty() || !(max_distance > 0.0)) return std::nullopt;
+  const double bound = max_distance == std::numeric_limits<double>::infinity()
+                           ? std::numeric_limits<double>::infinity()
+                           : max_distance * max_distance;
+  NearestWithin result(bound);
+  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  if (!result.found()) return std::nullopt;
+  return result.neighbor();
+}
+
+std::size_t KdTree::knn(const Vec3& query, std::size_t k, std::uint32_t* indices,
+                        double* squared_distances) const {
+  if (empty() || k == 0) return 0;
+  nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> result(k);
+  result.init(indices, squared_distances);
+  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  return result.size();
+}
+
+void KdTree::knn(const Vec3& query, std::size_t k, std::vector<Neighbor>& out) const {
+  out.clear();
+  if (empty() || k == 0) return;
+  std::vector<std::uint32_t> indices(k);
+  std::vector<double> distances(k);
+  const std::size_t found = knn(query, k, indices.data(), distances.data());
+  out.reserve(found);
+  for (std::size_t i = 0; i < found; ++i) out.push_back({indices[i], distances[i]});
+}
+
+void KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const {
+  out.clear();
+  if (empty() || !(radius >= 0.0)) return;
+  std::vector<std::pair<std::uint32_t, double>> found;
+  // nanoflann's radius search is strict (d < r); widen by one ulp so that r is inclusive.
+  const double r2 = std::nextafter(radius * radius, std::numeric_limits<double>::infinity());
+  impl_->index.radiusSearch(query.data(), r2, found, nanoflann::SearchParams(32, 0.0f, true));
+  out.reserve(found.size());
+  for (const auto& [index, d2] : found) out.push_back({index, d2});
+}
+
+// ---- WeightedKdTree: (p, sqrt(w)) in 4-D --------------------------------------------------
+
+namespace {
+
+struct Lifted {
+  std::vector<std::array<double, 4>> points;
+  std::size_t kdtree_get_point_count() const { return points.size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return points[i][dim]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+using LiftedIndex =
+    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Lifted, double,
+                                                                     std::uint32_t>,
+                                        Lifted, 4, std::uint32_t>;
+
+Lifted lift(const std::vector<Vec3>& points, const std::vector<double>& weights) {
+  if (points.size() != weights.size()) {
+    throw std::invalid_argument("WeightedKdTree: " + std::to_string(points.size()) +
+                                " points but " + std::to_string(weights.size()) + " weights");
+  }
+  Lifted lifted;
+  lifted.points.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!(weights[i] >= 0.0) || !std::isfinite(weights[i])) {
+      throw std::invalid_argument("WeightedKdTree: weight " + std::to_string(i) + " = " +
+                                  std::to_string(weights[i]) + " (must be finite and >= 0)");
+    }
+    lifted.points.push_back({points[i].x(), points[i].y(), points[i].z(), std::sqrt(weights[i])});
+  }
+  return lifted;
+}
+
+}  // namespace
+
+struct WeightedKdTree::Impl {
+  Impl(const std::vector<Vec3>& p, const std::vector<double>& w, const KdTreeSettings& settings)
+      : points(p), weights(w), lifted(lift(p, w)),
+        index(4, lifted,
+              nanoflann::KDTreeSingleIndexAdaptorParams(
+                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {}
+  // The exact weighted distance (the lifted one squares a rounded square root).
+  double value(const Vec3& q, std::uint32_t j) const {
+    return (q - points[j]).squaredNorm() + weights[j];
+  }
+  std::vector<Vec3> points;
+  std::vector<double> weights;
+  Lifted lifted;
+  LiftedIndex index;
+};
+
+WeightedKdTree::WeightedKdTree(const std::vector<Vec3>& points, const std::vector<double>& weights,
+                               const KdTreeSettings& settings)
+    : impl_(std::make_unique<Impl>(points, weights, settings)) {}
+WeightedKdTree::~WeightedKdTree() = default;
+WeightedKdTree::WeightedKdTree(WeightedKdTree&&) noexcept = default;
+WeightedKdTree& WeightedKdTree::operator=(WeightedKdTree&&) noexcept = default;
+
+std::size_t WeightedKdTree::size() const { return impl_->points.size(); }
+
+std::optional<Neighbor> WeightedKdTree::nearest(const Vec3& query) const {
+  if (size() == 0) return std::nullopt;
+  const double q[4] = {query.x(), query.y(), query.z(), 0.0};
+  std::uint32_t index = 0;
+  double d2 = 0.0;
+  nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> result(1);
+  result.init(&index, &d2);
+  impl_->index.findNeighbors(result, q, nanoflann::SearchParams());
+  return Neighbor{index, impl_->value(query, index)};
+}
+
+void WeightedKdTree::below(const Vec3& query, double bound, std::vector<Neighbor>& out) const {
+  out.clear();
+  if (size() == 0 || !(bound > 0.0)) return;
+  const double q[4] = {query.x(), query.y(), query.z(), 0.0};
+  std::vector<std::pair<std::uint32_t, double>> found;
+  // Widened by a relative 1e-12 so rounding in the lifted distance cannot hide a point; the
+  // exact value then decides.
+  impl_->index.radiusSearch(q, bound * (1.0 + 1e-12), found,
+                            nanoflann::SearchParams(32, 0.0f, false));
+  for (const auto& [index, lifted_d2] : found) {
+    const double exact = impl_->value(query, index);
+    if (exact < bound) out.push_back({index, exact});
+  }
+}
+
+}  // namespace springscan::analysis

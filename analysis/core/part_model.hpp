@@ -1,0 +1,72 @@
+#pragma once
+// A CAD part as the analysis sees it: even surface samples, the segmentation into flanges and
+// bends, and exact distance queries. No OpenCASCADE type appears here: analysis/cad_*.cpp
+// builds a PartModel from IGES/STEP, tests and simulators build one from synthetic geometry.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "analysis/core/point_cloud.hpp"
+
+namespace springscan::analysis {
+
+/// A flat region of the sheet: adjacent coplanar CAD faces merged (DESIGN.md stage 6-7).
+struct Flange {
+  int id = 0;
+  std::vector<int> face_ids;
+  Vec3 point = Vec3::Zero();   ///< a point on the plane (CAD frame, mm)
+  Vec3 normal = Vec3::UnitZ(); ///< unit plane normal, along the faces' outward orientation
+  double area_mm2 = 0.0;
+  /// Distance between the sheet's two sides when the flange has both (a solid); 0 for a
+  /// surface model. `point` and `normal` are those of one side: which one, a bend's geometry
+  /// tells (springback.cpp, concave_normal).
+  double thickness_mm = 0.0;
+};
+
+/// A bend: a cylindrical (or tangent-continuous curved) region joining two flanges.
+struct Bend {
+  int id = 0;
+  std::vector<int> face_ids;
+  Vec3 axis_point = Vec3::Zero();
+  Vec3 axis_direction = Vec3::UnitX();  ///< unit
+  double radius_mm = 0.0;               ///< inner bend radius
+  double nominal_angle_deg = 0.0;       ///< the angle the sheet turns at the bend (0 = flat)
+  int flange_a = -1;                    ///< Flange::id on one side
+  int flange_b = -1;                    ///< Flange::id on the other side
+};
+
+struct PartSegmentation {
+  std::vector<Flange> flanges;
+  std::vector<Bend> bends;
+  std::vector<int> other_faces;  ///< faces that are neither flange nor bend
+};
+
+/// The closest point of the model surface to a query point.
+struct SurfaceHit {
+  double signed_distance_mm = 0.0;  ///< positive on the side the surface normal points to
+  Vec3 foot = Vec3::Zero();         ///< closest surface point
+  Vec3 normal = Vec3::UnitZ();      ///< surface normal at the foot
+  int face_id = -1;
+};
+
+/// Exact point-to-surface distance. Implementations must allow concurrent calls to `closest`.
+class SurfaceDistance {
+ public:
+  virtual ~SurfaceDistance() = default;
+  /// The closest surface point to `query` (CAD frame, mm).
+  virtual SurfaceHit closest(const Vec3& query) const = 0;
+};
+
+/// Everything the pipeline needs of the CAD side.
+struct PartModel {
+  PointCloud samples;                        ///< even samples with normals and face ids
+  PartSegmentation segmentation;
+  int face_count = 0;
+  std::shared_ptr<const SurfaceDistance> distance;  ///< null: distances to the samples instead
+  std::string source_sha256;  ///< hex SHA-256 of the file the model was built from (the report's
+                              ///< input.cad_sha256: which CAD revision was measured against);
+                              ///< empty for a model built in memory
+};
+
+}  // namespace springscan::analysis

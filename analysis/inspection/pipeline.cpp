@@ -1,0 +1,250 @@
+// The inspection pipeline (DESIGN.md "Analysis pipeline"): one commented line per stage.
+#include "analysis/inspection/pipeline.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "analysis/matching/compensation.hpp"
+#include "analysis/matching/deformation_field.hpp"
+#include "analysis/deviation/deviation.hpp"
+#include "analysis/messages/fit_proto.hpp"
+#include "analysis/registration/global_fit.hpp"
+#include "analysis/core/kdtree.hpp"
+#include "analysis/messages/matching_proto.hpp"
+#include "analysis/core/parallel.hpp"
+#include "analysis/preprocess/reduction.hpp"
+#include "analysis/messages/settings_proto.hpp"
+#include "analysis/messages/springback_proto.hpp"
+#include "analysis/inspection/verdict.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Every stage's settings, from the C++ defaults plus the proto overrides.
+struct PipelineSettings {
+  NormalSettings normals;
+  ReductionSettings reduction;
+  GlobalFitSettings global_fit;
+  DeviationSettings deviation;
+  SpringbackSettings springback;
+  DeformationFieldSettings field;
+  CompensationSettings compensation;
+  VerdictSettings verdict;
+  int threads = 0;
+};
+
+Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
+  PipelineSettings s;
+  auto threads = threads_from_proto(m);
+  auto normals = from_proto(m.normals());
+  auto reduction = from_proto(m.reduction());
+  auto fit = from_proto(m.registration());
+  auto deviation = from_proto(m.deviation());
+  auto springback = from_proto(m.local_fit());
+  auto field = from_proto(m.matching());
+  auto compensation = from_proto(m.compensation());
+  auto verdict = from_proto(m.verdict());
+  for (const std::string* error : {threads ? nullptr : &threads.message(),
+                                   normals ? nullptr : &normals.message(),
+                                   reduction ? nullptr : &reduction.message(),
+                                   fit ? nullptr : &fit.message(),
+                                   deviation ? nullptr : &deviation.message(),
+                                   springback ? nullptr : &springback.message(),
+                                   field ? nullptr : &field.message(),
+                                   compensation ? nullptr : &compensation.message(),
+                                   verdict ? nullptr : &verdict.message()})
+    if (error) return fail(*error);
+  s.threads = *threads;
+  s.normals = *normals;
+  s.reduction = *reduction;
+  s.global_fit = *fit;
+  s.deviation = *deviation;
+  s.springback = *springback;
+  s.field = *field;
+  s.compensation = *compensation;
+  s.verdict = *verdict;
+  // Without its own tolerance the verdict judges against the deviation stage's (--tolerance).
+  if (!m.verdict().has_tolerance_mm()) s.verdict.tolerance_mm = s.deviation.tolerance_mm;
+  // The per-bend pass uses the verdict's angle tolerance (--angle-tolerance, settings file).
+  if (m.verdict().has_angle_tolerance_deg()) {
+    if (!(m.verdict().angle_tolerance_deg() > 0.0))
+      return fail("settings: verdict.angle_tolerance_deg = " +
+                  std::to_string(m.verdict().angle_tolerance_deg()) + " (must be > 0)");
+    s.springback.angle_tolerance_deg = m.verdict().angle_tolerance_deg();
+  }
+  s.springback.threads = s.threads;
+  s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
+  s.deviation.threads = s.reduction.curvature.threads = s.threads;
+  return s;
+}
+
+// report.settings: the overrides as given (other stages' sections kept), ours with defaults.
+void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& given,
+                     v1::AnalysisSettings* out) {
+  *out = given;
+  to_proto(s.normals, out->mutable_normals());
+  to_proto(s.reduction, out->mutable_reduction());
+  to_proto(s.global_fit, out->mutable_registration());
+  to_proto(s.deviation, out->mutable_deviation());
+  to_proto(s.springback, out->mutable_local_fit());
+  to_proto(s.field, out->mutable_matching());
+  to_proto(s.compensation, out->mutable_compensation());
+  to_proto(s.verdict, out->mutable_verdict());
+  out->set_threads(s.threads);
+}
+
+// Refuses what no fit can use; warns about what makes a fit doubtful (issue 3 "Bad input").
+std::optional<Error> check_inputs(const PartModel& model, const PointCloud& scan,
+                                  v1::InspectionReport& report) {
+  if (scan.empty()) return fail("scan: no points");
+  if (scan.size() < 3)
+    return fail("scan: needs at least 3 points, got " + std::to_string(scan.size()));
+  if (model.samples.size() < 3) return fail("model: fewer than 3 samples");
+  if (!all_finite(scan.points)) return fail("scan: non-finite (NaN/inf) coordinates");
+  if (!all_finite(model.samples.points)) return fail("model: non-finite (NaN/inf) coordinates");
+  if (model.samples.normals.size() != model.samples.size())
+    return fail("model: the samples need normals (" + std::to_string(model.samples.normals.size()) +
+                " for " + std::to_string(model.samples.size()) + " points)");
+  const auto [slo, shi] = bounding_box(scan.points);
+  const auto [mlo, mhi] = bounding_box(model.samples.points);
+  const double scan_size = (shi - slo).norm(), model_size = (mhi - mlo).norm();
+  const double ratio = std::max(scan_size, model_size) / std::max(std::min(scan_size, model_size), 1e-12);
+  std::ostringstream text;
+  text << "scan extent " << scan_size << " mm vs model extent " << model_size << " mm (ratio "
+       << ratio << ")";
+  if (ratio >= 100.0)
+    return fail(text.str() + ": the scan and the model are probably in different units (mm vs m "
+                             "or inch); convert one of them");
+  if (ratio >= 5.0)
+    report.add_warnings(text.str() + ": a partial scan, or different units (inch vs mm?)");
+  return std::nullopt;
+}
+
+// deviation.ply content: scan in the CAD frame, signed deviation and its colour.
+PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviation,
+                           double color_scale_mm) {
+  scan_in_cad.scalars = deviation.signed_distance_mm;
+  scan_in_cad.colors.resize(scan_in_cad.size());
+  for (std::size_t i = 0; i < scan_in_cad.size(); ++i)
+    scan_in_cad.colors[i] = deviation_color(scan_in_cad.scalars[i], color_scale_mm);
+  return scan_in_cad;
+}
+
+// Stages 6-7: local best fits of the CAD flanges and the bend table (docs/springback.md). A
+// model without flanges has no bends to measure; a model the stage cannot use (no face ids)
+// gives a warning rather than failing the whole inspection.
+void add_bend_table(const PartModel& model, const PointCloud& scan_in_cad,
+                    const SpringbackSettings& settings, v1::InspectionReport& report) {
+  if (model.segmentation.flanges.empty()) return;
+  const auto result = measure_springback(model, scan_in_cad, settings);
+  if (!result) {
+    report.add_warnings(result.message());
+    return;
+  }
+  fill_springback_report(*result, report);
+  for (const BendMeasurement& bend : result->bends)
+    if (!bend.measured) report.add_warnings(bend.status);
+}
+
+// Stages 8-9: the deformation field between the k-center-reduced model and scan (paper §5,
+// exact matching with its certificate) and the compensation vectors at the k-center model
+// points (docs/matching.md).
+std::optional<Error> add_deformation(const ReductionOutcome& reduced, const Transform& T_cad_scan,
+                                     const PipelineSettings& s, v1::InspectionReport& report) {
+  std::vector<Vec3> scan_centers;
+  scan_centers.reserve(reduced.scan_centers.size());
+  for (const Vec3& p : reduced.scan_centers) scan_centers.push_back(T_cad_scan * p);
+  auto field = deformation_field(reduced.model_centers, scan_centers, s.field);
+  if (!field) return fail(field.message());
+  to_proto(*field, report.mutable_deformation_field());
+  if (s.field.method == CorrespondenceMethod::kMinCostMatching && !field->optimality_certified)
+    report.add_warnings("deformation field: the matching's optimality certificate failed: " +
+                        field->matching.certificate.failure);
+  auto comp = compensation(*field, reduced.model_centers, s.compensation);
+  if (!comp) return fail(comp.message());
+  append_to_report(*comp, &report);
+  if (comp->unsupported > 0)
+    report.add_warnings("compensation: " + std::to_string(comp->unsupported) +
+                        " model control points have no deformation vector nearby");
+  if (comp->clipped > 0)
+    report.add_warnings("compensation: " + std::to_string(comp->clipped) +
+                        " vectors clipped to " + std::to_string(s.compensation.max_magnitude_mm) +
+                        " mm");
+  return std::nullopt;
+}
+
+}  // namespace
+
+Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
+                                           const v1::AnalysisSettings& settings) {
+  const auto start = Clock::now();
+  auto config = load_settings(settings);
+  if (!config) return fail(config.message());
+  InspectionOutcome out;
+  v1::InspectionReport& report = out.report;
+  report.set_schema("springscan.report.v1");
+  record_settings(*config, settings, report.mutable_settings());
+  report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan.size()));
+  report.mutable_input()->set_model_points(static_cast<std::int64_t>(model.samples.size()));
+  report.mutable_input()->set_cad_faces(model.face_count);
+  report.mutable_input()->set_cad_sha256(model.source_sha256);
+  if (auto error = check_inputs(model, scan, report)) return *error;
+  auto& timings = *report.mutable_timings_ms();
+
+  auto t = Clock::now();
+  // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
+  auto reduced = reduce(scan, model.samples, config->reduction);
+  if (!reduced) return fail(reduced.message());
+  to_proto(*reduced, config->reduction, model.samples.size(), scan.size(), report.mutable_reduction());
+  timings.set_reduce(ms_since(t));
+
+  t = Clock::now();
+  // 4. Global fit: PCA with every proper axis candidate, then ICP (paper §3).
+  const KdTree model_tree(model.samples.points);
+  auto fit = global_fit(reduced->scan_for_fit.points, model_tree, model.samples.normals,
+                        config->global_fit);
+  if (!fit) return fail(fit.message());
+  to_proto(*fit, config->global_fit, report.mutable_global_fit());
+  for (const auto& warning : fit->warnings) report.add_warnings(warning);
+  timings.set_global_fit(ms_since(t));
+
+  t = Clock::now();
+  // 5. Deviation: signed distance of every scan point to the model (DESIGN.md stage 5).
+  PointCloud scan_in_cad = transformed(scan, fit->T_cad_scan);
+  auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
+  if (!deviation) return fail(deviation.message());
+  to_proto(*deviation, config->deviation, report.mutable_deviation());
+  // The fit's health figure: the distance of the scan to the surface after the fit, trimmed
+  // like ICP's pairs. rms_final (to the nearest model sample) grows with the sample spacing,
+  // and on a thick sheet the nearest sample may lie on the other side.
+  report.mutable_global_fit()->set_rms_residual(
+      trimmed_rms(deviation->signed_distance_mm, config->global_fit.icp.trimmed_fraction));
+  out.deviation_cloud = deviation_cloud(std::move(scan_in_cad), *deviation,
+                                        report.deviation().color_scale_mm());
+  timings.set_deviation(ms_since(t));
+
+  t = Clock::now();
+  // 6-7. Local best fits per flange and springback per bend (paper §4, automated).
+  add_bend_table(model, out.deviation_cloud, config->springback, report);
+  timings.set_local_fits(ms_since(t));
+
+  t = Clock::now();
+  // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
+  if (auto error = add_deformation(*reduced, fit->T_cad_scan, *config, report)) return *error;
+  timings.set_deformation(ms_since(t));
+
+  // 9. Verdict: deviation and springback against the tolerances, analysis health.
+  *report.mutable_verdict() = decide_verdict(report, config->verdict);
+
+  timings.set_total(ms_since(start));
+  return out;
+}
+
+}  // namespace springscan::analysis

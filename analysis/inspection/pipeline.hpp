@@ -1,0 +1,22 @@
+#pragma once
+// The analysis pipeline: the DESIGN.md stages composed, one call per inspection. Used by
+// `springscan analyze` and by the daemon's job runner.
+
+#include "analysis/core/expected.hpp"
+#include "analysis/core/part_model.hpp"
+#include "analysis/core/point_cloud.hpp"
+#include "proto/springscan.pb.h"
+
+namespace springscan::analysis {
+
+struct InspectionOutcome {
+  v1::InspectionReport report;  ///< every field DESIGN.md lists, timings included
+  PointCloud deviation_cloud;   ///< scan points in the CAD frame, scalars = signed deviation
+};
+
+/// Runs every stage on one scan. `settings` holds only overrides (proto `optional` fields);
+/// each stage starts from its C++ defaults. Errors: unusable input (empty, degenerate, NaN).
+Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
+                                           const v1::AnalysisSettings& settings = {});
+
+}  // namespace springscan::analysis

@@ -1,0 +1,139 @@
+// Compensation vectors from the deformation field (compensation.hpp, docs/matching.md).
+#include "analysis/matching/compensation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "analysis/core/kdtree.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+// The median distance from each field point to its nearest other field point: the sampling
+// spacing of the reduced model (about the k-center radius w).
+double median_spacing(const std::vector<Vec3>& points) {
+  if (points.size() < 2) return 0.0;
+  const KdTree tree(points);
+  std::vector<double> nearest;
+  nearest.reserve(points.size());
+  std::vector<Neighbor> two;
+  for (const auto& p : points) {
+    tree.knn(p, 2, two);
+    if (two.size() == 2) nearest.push_back(std::sqrt(two[1].squared_distance));
+  }
+  if (nearest.empty()) return 0.0;
+  std::nth_element(nearest.begin(), nearest.begin() + static_cast<long>(nearest.size() / 2),
+                   nearest.end());
+  return nearest[nearest.size() / 2];
+}
+
+std::string validate(const std::vector<Vec3>& control, const CompensationSettings& s) {
+  if (!std::isfinite(s.scale)) return "scale is not finite";
+  if (!(s.max_magnitude_mm > 0.0) || !std::isfinite(s.max_magnitude_mm)) {
+    return "max_magnitude_mm = " + std::to_string(s.max_magnitude_mm) + " (must be > 0)";
+  }
+  if (!(s.smoothing_radius_mm >= 0.0) || !std::isfinite(s.smoothing_radius_mm)) {
+    return "smoothing_radius_mm = " + std::to_string(s.smoothing_radius_mm) + " (must be >= 0)";
+  }
+  for (std::size_t k = 0; k < control.size(); ++k) {
+    if (!control[k].allFinite()) return "control point " + std::to_string(k) + " is not finite";
+  }
+  return {};
+}
+
+// Prints -0.0 as 0.0: the files are read by people and by CAM tools.
+double clean(double x) { return x == 0.0 ? 0.0 : x; }
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<std::FILE, FileCloser>;
+
+}  // namespace
+
+Expected<Compensation> compensation(const DeformationField& field,
+                                    const std::vector<Vec3>& control_points,
+                                    const CompensationSettings& settings) {
+  if (const std::string problem = validate(control_points, settings); !problem.empty()) {
+    return fail("compensation: " + problem);
+  }
+  std::vector<Vec3> anchors;
+  anchors.reserve(field.vectors.size());
+  for (const auto& v : field.vectors) anchors.push_back(v.model);
+
+  Compensation out;
+  out.smoothing_radius_mm = settings.smoothing_radius_mm > 0.0 ? settings.smoothing_radius_mm
+                                                               : median_spacing(anchors);
+  const double sigma = out.smoothing_radius_mm;
+  const KdTree tree(anchors);
+  std::vector<Neighbor> near;
+  out.vectors.reserve(control_points.size());
+  for (const Vec3& x : control_points) {
+    CompensationVector c;
+    c.point = x;
+    // sigma = 0 (a single field vector): only a coinciding point is supported.
+    tree.radius(x, 3.0 * sigma, near);
+    double weight_sum = 0.0;
+    Vec3 sum = Vec3::Zero();
+    for (const Neighbor& n : near) {
+      const double w = sigma > 0.0 ? std::exp(-n.squared_distance / (2.0 * sigma * sigma)) : 1.0;
+      weight_sum += w;
+      sum += w * field.vectors[n.index].displacement();
+    }
+    c.support = static_cast<int>(near.size());
+    c.supported = weight_sum > 0.0;
+    if (c.supported) {
+      c.deformation = sum / weight_sum;
+      c.vector = -settings.scale * c.deformation;
+      const double length = c.vector.norm();
+      if (length > settings.max_magnitude_mm) {
+        c.vector *= settings.max_magnitude_mm / length;
+        c.clipped = true;
+        ++out.clipped;
+      }
+      out.max_magnitude_mm = std::max(out.max_magnitude_mm, c.vector.norm());
+    } else {
+      ++out.unsupported;
+    }
+    out.vectors.push_back(c);
+  }
+  return out;
+}
+
+Expected<std::size_t> write_compensation_csv(const std::string& path, const Compensation& c) {
+  const File f(std::fopen(path.c_str(), "w"));
+  if (!f) return fail(path + ": cannot open for writing");
+  std::fprintf(f.get(), "x_mm,y_mm,z_mm,cx_mm,cy_mm,cz_mm,magnitude_mm,supported,clipped\n");
+  for (const auto& v : c.vectors) {
+    std::fprintf(f.get(), "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%d\n", v.point.x(), v.point.y(),
+                 v.point.z(), clean(v.vector.x()), clean(v.vector.y()), clean(v.vector.z()),
+                 v.vector.norm(),
+                 v.supported ? 1 : 0, v.clipped ? 1 : 0);
+  }
+  if (std::ferror(f.get())) return fail(path + ": write failed");
+  return c.vectors.size();
+}
+
+Expected<std::size_t> write_compensation_ply(const std::string& path, const Compensation& c) {
+  const File f(std::fopen(path.c_str(), "w"));
+  if (!f) return fail(path + ": cannot open for writing");
+  std::fprintf(f.get(),
+               "ply\nformat ascii 1.0\ncomment springscan compensation vectors, CAD frame, mm\n"
+               "element vertex %zu\nproperty double x\nproperty double y\nproperty double z\n"
+               "property float nx\nproperty float ny\nproperty float nz\nproperty float cx\n"
+               "property float cy\nproperty float cz\nproperty float magnitude\nend_header\n",
+               c.vectors.size());
+  for (const auto& v : c.vectors) {
+    const double length = v.vector.norm();
+    const Vec3 dir = length > 0.0 ? Vec3(v.vector / length) : Vec3::Zero();
+    std::fprintf(f.get(), "%.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", v.point.x(),
+                 v.point.y(), v.point.z(), clean(dir.x()), clean(dir.y()), clean(dir.z()),
+                 clean(v.vector.x()), clean(v.vector.y()), clean(v.vector.z()), length);
+  }
+  if (std::ferror(f.get())) return fail(path + ": write failed");
+  return c.vectors.size();
+}
+
+}  // namespace springscan::analysis

@@ -1,0 +1,155 @@
+// Proto conversions of the matching, compensation and verdict stages (matching_proto.hpp).
+#include "analysis/messages/matching_proto.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace springscan::analysis {
+namespace {
+
+Error bad(const std::string& field, double value, const std::string& rule) {
+  return fail("settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
+}
+
+void set_vec(const Vec3& p, v1::Vec3* out) {
+  out->set_x(p.x());
+  out->set_y(p.y());
+  out->set_z(p.z());
+}
+
+}  // namespace
+
+Expected<DeformationFieldSettings> from_proto(const v1::MatchingSettings& m) {
+  DeformationFieldSettings s;
+  if (m.has_method()) {
+    switch (m.method()) {
+      case v1::MatchingSettings::NEAREST_NEIGHBOR:
+        s.method = CorrespondenceMethod::kNearestNeighbor;
+        break;
+      case v1::MatchingSettings::MIN_COST_MATCHING:
+        s.method = CorrespondenceMethod::kMinCostMatching;
+        break;
+      default:
+        break;  // METHOD_UNSPECIFIED keeps the default
+    }
+  }
+  if (m.has_candidate_neighbors()) {
+    if (m.candidate_neighbors() < 1 || m.candidate_neighbors() > 1024) {
+      return bad("matching.candidate_neighbors", m.candidate_neighbors(), "1 to 1024");
+    }
+    s.matching.candidate_neighbors = m.candidate_neighbors();
+  }
+  if (m.has_dense_limit()) {
+    if (m.dense_limit() < 0) return bad("matching.dense_limit", m.dense_limit(), "must be >= 0");
+    s.matching.dense_limit = m.dense_limit();
+  }
+  return s;
+}
+
+Expected<CompensationSettings> from_proto(const v1::CompensationSettings& m) {
+  CompensationSettings s;
+  if (m.has_scale()) {
+    if (!std::isfinite(m.scale())) return bad("compensation.scale", m.scale(), "must be finite");
+    s.scale = m.scale();
+  }
+  if (m.has_max_magnitude_mm()) {
+    if (!(m.max_magnitude_mm() > 0.0) || !std::isfinite(m.max_magnitude_mm())) {
+      return bad("compensation.max_magnitude_mm", m.max_magnitude_mm(), "must be > 0");
+    }
+    s.max_magnitude_mm = m.max_magnitude_mm();
+  }
+  if (m.has_smoothing_radius_mm()) {
+    if (!(m.smoothing_radius_mm() >= 0.0) || !std::isfinite(m.smoothing_radius_mm())) {
+      return bad("compensation.smoothing_radius_mm", m.smoothing_radius_mm(),
+                 "must be >= 0; 0 = automatic");
+    }
+    s.smoothing_radius_mm = m.smoothing_radius_mm();
+  }
+  return s;
+}
+
+Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
+  VerdictSettings s;
+  if (m.has_tolerance_mm()) {
+    if (!(m.tolerance_mm() > 0.0)) return bad("verdict.tolerance_mm", m.tolerance_mm(), "> 0");
+    s.tolerance_mm = m.tolerance_mm();
+  }
+  if (m.has_angle_tolerance_deg()) {
+    if (!(m.angle_tolerance_deg() > 0.0)) {
+      return bad("verdict.angle_tolerance_deg", m.angle_tolerance_deg(), "must be > 0");
+    }
+    s.angle_tolerance_deg = m.angle_tolerance_deg();
+  }
+  if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::MAX) {
+    s.deviation_statistic = DeviationStatistic::kMax;
+  } else if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::P95) {
+    s.deviation_statistic = DeviationStatistic::kP95;
+  }
+  if (m.has_min_coverage()) {
+    if (!(m.min_coverage() >= 0.0 && m.min_coverage() <= 1.0)) {
+      return bad("verdict.min_coverage", m.min_coverage(), "0 to 1");
+    }
+    s.min_coverage = m.min_coverage();
+  }
+  if (m.has_max_fit_rms_mm()) {
+    if (!(m.max_fit_rms_mm() > 0.0)) {
+      return bad("verdict.max_fit_rms_mm", m.max_fit_rms_mm(), "must be > 0");
+    }
+    s.max_fit_rms_mm = m.max_fit_rms_mm();
+  }
+  return s;
+}
+
+void to_proto(const DeformationFieldSettings& s, v1::MatchingSettings* m) {
+  m->set_method(s.method == CorrespondenceMethod::kNearestNeighbor
+                    ? v1::MatchingSettings::NEAREST_NEIGHBOR
+                    : v1::MatchingSettings::MIN_COST_MATCHING);
+  m->set_candidate_neighbors(s.matching.candidate_neighbors);
+  m->set_dense_limit(s.matching.dense_limit);
+}
+
+void to_proto(const CompensationSettings& s, v1::CompensationSettings* m) {
+  m->set_scale(s.scale);
+  m->set_max_magnitude_mm(s.max_magnitude_mm);
+  m->set_smoothing_radius_mm(s.smoothing_radius_mm);
+}
+
+void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
+  m->set_tolerance_mm(s.tolerance_mm);
+  m->set_angle_tolerance_deg(s.angle_tolerance_deg);
+  m->set_deviation_statistic(s.deviation_statistic == DeviationStatistic::kMax
+                                 ? v1::VerdictSettings::MAX
+                                 : v1::VerdictSettings::P95);
+  m->set_min_coverage(s.min_coverage);
+  m->set_max_fit_rms_mm(s.max_fit_rms_mm);
+}
+
+void to_proto(const DeformationField& field, v1::DeformationField* m) {
+  m->Clear();
+  m->set_method(to_string(field.method));
+  for (const auto& v : field.vectors) {
+    auto* c = m->add_vectors();
+    set_vec(v.model, c->mutable_model());
+    set_vec(v.scan, c->mutable_scan());
+    c->set_model_index(static_cast<std::int32_t>(v.model_index));
+    c->set_scan_index(static_cast<std::int32_t>(v.scan_index));
+    c->set_squared_distance(v.squared_distance_mm2);
+  }
+  m->set_coverage(field.coverage);
+  m->set_model_points(static_cast<std::int32_t>(field.model_points));
+  m->set_scan_points(static_cast<std::int32_t>(field.scan_points));
+  m->set_total_cost(field.total_cost_mm2);
+  m->set_optimality_certified(field.optimality_certified);
+  m->set_nearest_neighbor_coverage(field.nearest_neighbor_coverage);
+}
+
+void append_to_report(const Compensation& compensation, v1::InspectionReport* report) {
+  for (const auto& v : compensation.vectors) {
+    if (!v.supported) continue;
+    auto* c = report->add_compensation();
+    set_vec(v.point, c->mutable_point());
+    set_vec(v.vector, c->mutable_vector());
+  }
+}
+
+}  // namespace springscan::analysis

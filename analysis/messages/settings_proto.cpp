@@ -1,0 +1,191 @@
+// Proto settings of the pre-processing, global fit and deviation stages (settings_proto.hpp).
+#include "analysis/messages/settings_proto.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace springscan::analysis {
+namespace {
+
+Error bad(const std::string& field, double value, const std::string& rule) {
+  return fail("settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
+}
+
+bool in_range(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+}  // namespace
+
+Expected<NormalSettings> from_proto(const v1::NormalSettings& m) {
+  NormalSettings s;
+  if (m.has_k_neighbors()) {
+    if (m.k_neighbors() < 3 || m.k_neighbors() > 1000)
+      return bad("normals.k_neighbors", m.k_neighbors(), "3 to 1000");
+    s.k_neighbors = m.k_neighbors();
+  }
+  if (m.has_radius_mm()) {
+    if (!in_range(m.radius_mm(), 0.0, 1e6)) return bad("normals.radius_mm", m.radius_mm(), ">= 0");
+    s.radius_mm = m.radius_mm();
+  }
+  return s;
+}
+
+Expected<ReductionSettings> from_proto(const v1::ReductionSettings& m) {
+  ReductionSettings s;
+  if (m.has_kcenter_radius_mm()) {
+    if (!in_range(m.kcenter_radius_mm(), 1e-6, 1e6))
+      return bad("reduction.kcenter_radius_mm", m.kcenter_radius_mm(), "must be > 0");
+    s.kcenter.radius_mm = m.kcenter_radius_mm();
+  }
+  if (m.has_kcenter_count()) {
+    if (m.kcenter_count() < 0 || m.kcenter_count() > 10'000'000)
+      return bad("reduction.kcenter_count", m.kcenter_count(), "0 to 10^7; 0 = use the radius");
+    s.kcenter.center_count = static_cast<std::size_t>(m.kcenter_count());
+  }
+  if (m.has_voxel_size_mm()) {
+    if (!in_range(m.voxel_size_mm(), 0.0, 1e6))
+      return bad("reduction.voxel_size_mm", m.voxel_size_mm(), ">= 0; 0 = automatic");
+    s.voxel_size_mm = m.voxel_size_mm();
+  }
+  if (m.has_min_curvature()) {
+    if (!in_range(m.min_curvature(), 0.0, 1.0))
+      return bad("reduction.min_curvature", m.min_curvature(), "0 to 1");
+    s.curvature.min_curvature = m.min_curvature();
+  }
+  return s;
+}
+
+namespace {
+
+// The ICP fields of RegistrationSettings; split from from_proto to keep both short.
+std::optional<Error> icp_from_proto(const v1::RegistrationSettings& m, IcpSettings& s) {
+  using M = v1::RegistrationSettings;
+  if (m.has_method() && !M::Method_IsValid(m.method()))
+    return bad("registration.method", m.method(), "POINT_TO_POINT or POINT_TO_PLANE");
+  if (m.has_robust_kernel() && !M::RobustKernel_IsValid(m.robust_kernel()))
+    return bad("registration.robust_kernel", m.robust_kernel(), "NONE, HUBER or TUKEY");
+  if (m.has_method() && m.method() != M::METHOD_UNSPECIFIED)
+    s.method = m.method() == M::POINT_TO_POINT ? IcpMethod::kPointToPoint
+                                               : IcpMethod::kPointToPlane;
+  if (m.has_robust_kernel() && m.robust_kernel() != M::KERNEL_UNSPECIFIED)
+    s.kernel = m.robust_kernel() == M::HUBER   ? RobustKernel::kHuber
+               : m.robust_kernel() == M::TUKEY ? RobustKernel::kTukey
+                                               : RobustKernel::kNone;
+  if (m.has_max_iterations()) {
+    if (m.max_iterations() < 0 || m.max_iterations() > 10000)
+      return bad("registration.max_iterations", m.max_iterations(), "0 to 10000");
+    s.max_iterations = m.max_iterations();
+  }
+  if (m.has_max_correspondence_distance_mm()) {
+    if (!in_range(m.max_correspondence_distance_mm(), 0.0, 1e9))
+      return bad("registration.max_correspondence_distance_mm",
+                 m.max_correspondence_distance_mm(), ">= 0; 0 = no limit");
+    s.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
+  }
+  if (m.has_trimmed_fraction()) {
+    if (!in_range(m.trimmed_fraction(), 0.0, 0.99))
+      return bad("registration.trimmed_fraction", m.trimmed_fraction(), "0 to 0.99");
+    s.trimmed_fraction = m.trimmed_fraction();
+  }
+  if (m.has_kernel_scale_mm()) {
+    if (!in_range(m.kernel_scale_mm(), 1e-9, 1e9))
+      return bad("registration.kernel_scale_mm", m.kernel_scale_mm(), "must be > 0");
+    s.kernel_scale_mm = m.kernel_scale_mm();
+  }
+  if (m.has_min_error_mm()) {
+    if (!in_range(m.min_error_mm(), 0.0, 1e9))
+      return bad("registration.min_error_mm", m.min_error_mm(), ">= 0");
+    s.min_error_mm = m.min_error_mm();
+  }
+  if (m.has_error_ratio_stop()) {
+    if (!in_range(m.error_ratio_stop(), 0.0, 1.0))
+      return bad("registration.error_ratio_stop", m.error_ratio_stop(), "0 to 1");
+    s.error_ratio_stop = m.error_ratio_stop();
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& m) {
+  GlobalFitSettings s;
+  if (auto error = icp_from_proto(m, s.icp)) return *error;
+  if (m.has_pca_initial_alignment()) s.pca_initial_alignment = m.pca_initial_alignment();
+  return s;
+}
+
+Expected<DeviationSettings> from_proto(const v1::DeviationSettings& m) {
+  DeviationSettings s;
+  if (m.has_tolerance_mm()) {
+    if (!in_range(m.tolerance_mm(), 1e-9, 1e6))
+      return bad("deviation.tolerance_mm", m.tolerance_mm(), "must be > 0");
+    s.tolerance_mm = m.tolerance_mm();
+  }
+  return s;
+}
+
+Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& m) {
+  SpringbackSettings s;
+  if (m.has_bend_margin_mm()) {
+    if (!in_range(m.bend_margin_mm(), 0.0, 1000.0))
+      return bad("local_fit.bend_margin_mm", m.bend_margin_mm(), "0 to 1000");
+    s.bend_margin_mm = m.bend_margin_mm();
+  }
+  if (m.has_max_iterations()) {
+    if (m.max_iterations() < 1 || m.max_iterations() > 10000)
+      return bad("local_fit.max_iterations", m.max_iterations(), "1 to 10000");
+    s.local_fit.max_iterations = m.max_iterations();
+  }
+  if (m.has_max_correspondence_distance_mm()) {
+    if (!in_range(m.max_correspondence_distance_mm(), 1e-6, 1e6))
+      return bad("local_fit.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
+                 "must be > 0");
+    s.local_fit.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
+    s.assignment_distance_mm = m.max_correspondence_distance_mm();
+  }
+  return s;
+}
+
+Expected<int> threads_from_proto(const v1::AnalysisSettings& m) {
+  if (!m.has_threads()) return 0;
+  if (m.threads() < 0 || m.threads() > 1024) return bad("threads", m.threads(), "0 to 1024");
+  return m.threads();
+}
+
+void to_proto(const NormalSettings& s, v1::NormalSettings* m) {
+  m->set_k_neighbors(s.k_neighbors);
+  m->set_radius_mm(s.radius_mm);
+}
+
+void to_proto(const ReductionSettings& s, v1::ReductionSettings* m) {
+  m->set_kcenter_radius_mm(s.kcenter.radius_mm);
+  m->set_kcenter_count(static_cast<std::int32_t>(s.kcenter.center_count));
+  m->set_voxel_size_mm(s.voxel_size_mm);
+  m->set_min_curvature(s.curvature.min_curvature);
+}
+
+void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {
+  using M = v1::RegistrationSettings;
+  m->set_method(s.icp.method == IcpMethod::kPointToPoint ? M::POINT_TO_POINT : M::POINT_TO_PLANE);
+  m->set_max_iterations(s.icp.max_iterations);
+  m->set_max_correspondence_distance_mm(s.icp.max_correspondence_distance_mm);
+  m->set_trimmed_fraction(s.icp.trimmed_fraction);
+  m->set_robust_kernel(s.icp.kernel == RobustKernel::kHuber   ? M::HUBER
+                       : s.icp.kernel == RobustKernel::kTukey ? M::TUKEY
+                                                              : M::NONE);
+  m->set_kernel_scale_mm(s.icp.kernel_scale_mm);
+  m->set_min_error_mm(s.icp.min_error_mm);
+  m->set_error_ratio_stop(s.icp.error_ratio_stop);
+  m->set_pca_initial_alignment(s.pca_initial_alignment);
+}
+
+void to_proto(const DeviationSettings& s, v1::DeviationSettings* m) {
+  m->set_tolerance_mm(s.tolerance_mm);
+}
+
+void to_proto(const SpringbackSettings& s, v1::LocalFitSettings* m) {
+  m->set_bend_margin_mm(s.bend_margin_mm);
+  m->set_max_iterations(s.local_fit.max_iterations);
+  m->set_max_correspondence_distance_mm(s.local_fit.max_correspondence_distance_mm);
+}
+
+}  // namespace springscan::analysis

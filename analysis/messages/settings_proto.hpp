@@ -1,0 +1,43 @@
+#pragma once
+// Proto settings (v1::*Settings, `optional` fields) -> the stages' C++ settings structs, and
+// back for report.settings. Each conversion starts from the struct's defaults and overrides
+// only the fields the message sets, validating each, naming the field and the value
+// (STYLE.md §4). One function per stage: other stages append theirs here or in their own
+// *_proto.cpp.
+
+#include "analysis/deviation/deviation.hpp"
+#include "analysis/core/expected.hpp"
+#include "analysis/registration/global_fit.hpp"
+#include "analysis/preprocess/normals.hpp"
+#include "analysis/preprocess/reduction.hpp"
+#include "analysis/springback/springback.hpp"
+#include "proto/springscan.pb.h"
+
+namespace springscan::analysis {
+
+/// normals.k_neighbors (3..1000), normals.radius_mm (>= 0).
+Expected<NormalSettings> from_proto(const v1::NormalSettings& message);
+/// reduction.kcenter_radius_mm (> 0), kcenter_count (0..10^7), voxel_size_mm (>= 0, 0 = auto),
+/// min_curvature (>= 0).
+Expected<ReductionSettings> from_proto(const v1::ReductionSettings& message);
+/// registration.*: method, max_iterations (0..10000), max_correspondence_distance_mm (>= 0),
+/// trimmed_fraction ([0, 1)), robust_kernel, kernel_scale_mm (> 0), min_error_mm (>= 0),
+/// error_ratio_stop ([0, 1]), pca_initial_alignment.
+Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& message);
+/// deviation.tolerance_mm (> 0).
+Expected<DeviationSettings> from_proto(const v1::DeviationSettings& message);
+/// local_fit.bend_margin_mm (0 to 1000), max_iterations (1 to 10000),
+/// max_correspondence_distance_mm (> 0; also the distance up to which scan points are
+/// assigned to flanges). The angle tolerance comes from verdict.angle_tolerance_deg.
+Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& message);
+/// threads (0..1024; 0 = all cores).
+Expected<int> threads_from_proto(const v1::AnalysisSettings& message);
+
+/// The settings in force, every field set (report.settings).
+void to_proto(const NormalSettings& settings, v1::NormalSettings* message);
+void to_proto(const ReductionSettings& settings, v1::ReductionSettings* message);
+void to_proto(const GlobalFitSettings& settings, v1::RegistrationSettings* message);
+void to_proto(const DeviationSettings& settings, v1::DeviationSettings* message);
+void to_proto(const SpringbackSettings& settings, v1::LocalFitSettings* message);
+
+}  // namespace springscan::analysis

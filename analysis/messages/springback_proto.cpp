@@ -1,0 +1,55 @@
+#include "analysis/messages/springback_proto.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+void to_proto(const Vec3& v, v1::Vec3& out) {
+  out.set_x(v.x());
+  out.set_y(v.y());
+  out.set_z(v.z());
+}
+
+}  // namespace
+
+void to_proto(const LocalFitResult& fit, v1::LocalFit& out) {
+  out.clear_transform();
+  const Eigen::Matrix4d m = fit.T_model_subset.matrix();
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) out.add_transform(m(r, c));
+  out.set_rms(fit.rms_mm);
+  out.set_inliers(static_cast<std::int64_t>(fit.inliers));
+  out.set_iterations(fit.iterations);
+  out.set_converged(fit.converged);
+  out.clear_error_history();
+  for (double e : fit.error_history) out.add_error_history(e);
+}
+
+void fill_springback_report(const SpringbackResult& result, v1::InspectionReport& report) {
+  for (const FlangeFit& flange : result.flanges) {
+    v1::Segment& s = *report.add_segments();
+    s.set_id(flange.flange_id);
+    for (int face : flange.face_ids) s.add_cad_faces(face);
+    s.set_points(static_cast<std::int64_t>(flange.indices.size()));
+    if (flange.fitted) to_proto(flange.fit, *s.mutable_local_fit());
+    s.set_kind("flange");
+  }
+  for (const BendMeasurement& m : result.bends) {
+    v1::Bend& b = *report.add_bends();
+    b.set_id(m.bend_id);
+    to_proto(m.axis_point, *b.mutable_axis_point());
+    to_proto(m.axis_direction, *b.mutable_axis_direction());
+    b.set_radius_mm(m.radius_mm);
+    b.set_nominal_angle_deg(m.nominal_angle_deg);
+    b.set_segment_a(m.flange_a);
+    b.set_segment_b(m.flange_b);
+    for (int face : m.face_ids) b.add_cad_faces(face);
+    b.set_angle_tolerance_deg(m.angle_tolerance_deg);
+    b.set_measured(m.measured);
+    b.set_pass(m.pass);
+    if (!m.measured) continue;  // angles stay unset (0) when nothing was measured
+    b.set_measured_angle_deg(m.measured_angle_deg);
+    b.set_springback_deg(m.springback_deg);
+  }
+}
+
+}  // namespace springscan::analysis

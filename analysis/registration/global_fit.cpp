@@ -1,0 +1,111 @@
+#include "analysis/registration/global_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "analysis/core/parallel.hpp"
+#include "analysis/preprocess/reduction.hpp"
+#include "analysis/preprocess/voxel.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+struct CoarseModel {
+  std::unique_ptr<KdTree> tree;  // null: use the full model
+  std::vector<Vec3> normals;
+};
+
+CoarseModel coarse_model(const KdTree& tree, const std::vector<Vec3>& normals, double divisions) {
+  CoarseModel out;
+  if (!(divisions > 0.0) || normals.size() != tree.size()) return out;
+  PointCloud cloud{tree.points(), normals, {}, {}, {}};
+  const auto [lo, hi] = bounding_box(cloud.points);
+  const double voxel = (hi - lo).norm() / divisions;
+  if (!(voxel > 0.0)) return out;
+  auto reduced = voxel_reduce(cloud, {voxel});
+  if (!reduced || reduced->cloud.size() < 100 || reduced->cloud.size() * 2 > tree.size()) return out;
+  out.normals = std::move(reduced->cloud.normals);
+  out.tree = std::make_unique<KdTree>(std::move(reduced->cloud.points));
+  return out;
+}
+
+// The rms before and after the PCA alignment are figures for the report, taken where the scan
+// may still be far from the model: a nearest search from 300 mm away visits most of the tree,
+// so a sample of the scan stands in for all of it.
+constexpr std::size_t kDiagnosticSample = 4096;
+
+}  // namespace
+
+double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
+                            const KdTree& tree, double trimmed_fraction, int threads) {
+  if (points.empty() || tree.empty()) return 0.0;
+  std::vector<double> d2(points.size());
+  parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) d2[i] = tree.nearest(T * points[i])->squared_distance;
+  });
+  const auto drop = static_cast<std::size_t>(std::clamp(trimmed_fraction, 0.0, 0.99) *
+                                             static_cast<double>(d2.size()));
+  const auto keep = d2.size() - drop;
+  if (drop > 0)
+    std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(keep - 1), d2.end());
+  double sum = 0.0;
+  for (std::size_t i = 0; i < keep; ++i) sum += d2[i];  // the kept values in a fixed order
+  return std::sqrt(sum / static_cast<double>(keep));
+}
+
+Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree& model_tree,
+                                     const std::vector<Vec3>& model_normals,
+                                     const GlobalFitSettings& settings) {
+  if (scan.empty()) return fail("global fit: the scan is empty");
+  if (model_tree.empty()) return fail("global fit: the model is empty");
+  if (!all_finite(scan)) return fail("global fit: the scan has non-finite (NaN/inf) coordinates");
+  GlobalFitResult result;
+  const int threads = settings.icp.threads;
+  const double trim = settings.icp.trimmed_fraction;
+  const std::vector<Vec3> diagnostic = strided_sample(scan, kDiagnosticSample);
+  result.rms_initial_mm =
+      rms_nearest_distance(diagnostic, Transform::Identity(), model_tree, trim, threads);
+  Transform start = Transform::Identity();
+  if (settings.pca_initial_alignment) {
+    PcaAlignSettings pca_settings = settings.pca;
+    pca_settings.threads = threads;
+    // The candidate search only has to tell poses apart: a coarse model makes its many short
+    // ICP runs several times cheaper; the final ICP below uses the full model.
+    const CoarseModel coarse = coarse_model(model_tree, model_normals, settings.pca_model_divisions);
+    auto pca = coarse.tree ? pca_align(scan, *coarse.tree, coarse.normals, pca_settings)
+                           : pca_align(scan, model_tree, model_normals, pca_settings);
+    if (!pca) return fail("global fit: " + pca.message());
+    result.pca = std::move(*pca);
+    start = result.pca.T_target_source;
+    result.rms_after_pca_mm =
+        rms_nearest_distance(diagnostic, result.pca.T_pca, model_tree, trim, threads);
+    if (result.pca.ambiguity > 0.9) {
+      std::ostringstream text;
+      text << "global fit: the part looks nearly symmetric (best/next distinct PCA candidate "
+              "error ratio " << result.pca.ambiguity << "); the orientation may be ambiguous";
+      result.warnings.push_back(text.str());
+    }
+  } else {
+    result.rms_after_pca_mm = result.rms_initial_mm;
+  }
+  auto fit = icp(scan, model_tree, model_normals, start, settings.icp);
+  if (!fit) return fail("global fit: " + fit.message());
+  result.icp = std::move(*fit);
+  result.T_cad_scan = result.icp.T_target_source;
+  result.rms_final_mm = rms_nearest_distance(scan, result.T_cad_scan, model_tree, trim, threads);
+  // A flat scan fixes only its normal offset and tilt by the surface; in-plane placement then
+  // rests on the outline (PCA) alone, even when ICP had nothing left to solve.
+  const auto frame = principal_frame(scan);
+  const bool flat = frame && frame->eigenvalues(2) <= 1e-8 * frame->eigenvalues(0);
+  if (result.icp.degenerate || flat)
+    result.warnings.push_back(
+        "global fit: the surface does not constrain every motion (e.g. a flat or cylindrical "
+        "part); the fit along the free directions is arbitrary");
+  if (!result.icp.converged)
+    result.warnings.push_back("global fit: ICP did not converge (" + result.icp.stop_reason + ")");
+  return result;
+}
+
+}  // namespace springscan::analysis

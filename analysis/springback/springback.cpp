@@ -1,0 +1,261 @@
+#include "analysis/springback/springback.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <unordered_map>
+
+#include "analysis/core/parallel.hpp"
+#include "analysis/core/kdtree.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+constexpr std::size_t kBlock = 4096;
+constexpr std::int32_t kNoFlange = -1;
+
+std::string check(const PartModel& model, const SpringbackSettings& st) {
+  const PointCloud& s = model.samples;
+  if (s.empty() || s.normals.size() != s.size() || s.face_ids.size() != s.size())
+    return "model samples need normals and face ids (" + std::to_string(s.size()) + " samples)";
+  if (!(st.bend_margin_mm >= 0.0 && st.bend_margin_mm < 1000.0))
+    return "bend_margin_mm " + std::to_string(st.bend_margin_mm) + " outside [0, 1000)";
+  if (!(st.assignment_distance_mm > 0.0))
+    return "assignment_distance_mm " + std::to_string(st.assignment_distance_mm) + " must be > 0";
+  if (st.max_scan_points < 0)
+    return "max_scan_points " + std::to_string(st.max_scan_points) + " must be >= 0";
+  const auto& flanges = model.segmentation.flanges;
+  const auto known = [&flanges](int id) {
+    return std::any_of(flanges.begin(), flanges.end(),
+                       [id](const Flange& f) { return f.id == id; });
+  };
+  for (const Bend& b : model.segmentation.bends)
+    if (!known(b.flange_a) || !known(b.flange_b))
+      return "bend " + std::to_string(b.id) + " joins unknown flange " +
+             std::to_string(known(b.flange_a) ? b.flange_b : b.flange_a);
+  return {};
+}
+
+// Per model sample: the index (into segmentation.flanges) of its flange, or kNoFlange for bend
+// and other faces and for flange samples within the margin of a bend sample. The margin is
+// measured on the model, so it does not depend on how far the part sprang back.
+std::vector<std::int32_t> sample_labels(const PartModel& model, double margin_mm, int threads) {
+  std::unordered_map<int, std::int32_t> flange_of_face;
+  const auto& flanges = model.segmentation.flanges;
+  for (std::size_t f = 0; f < flanges.size(); ++f)
+    for (int face : flanges[f].face_ids) flange_of_face[face] = static_cast<std::int32_t>(f);
+  const PointCloud& s = model.samples;
+  std::vector<std::int32_t> labels(s.size(), kNoFlange);
+  std::vector<Vec3> bend_points;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const auto it = flange_of_face.find(s.face_ids[i]);
+    if (it != flange_of_face.end())
+      labels[i] = it->second;
+    else
+      bend_points.push_back(s.points[i]);  // bend and other faces: never fitted as flange
+  }
+  if (bend_points.empty() || margin_mm <= 0.0) return labels;
+  const KdTree bends(std::move(bend_points));
+  for_each_block(s.size(), kBlock, threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i)
+      if (labels[i] != kNoFlange && bends.nearest(s.points[i], margin_mm)) labels[i] = kNoFlange;
+  });
+  return labels;
+}
+
+// Interleaves the bits of three 21-bit cell coordinates (a Morton / Z-order key).
+std::uint64_t morton_key(const Vec3& p, const Vec3& origin) {
+  constexpr double kCellMm = 2.0;
+  std::uint64_t key = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double cell = std::clamp((p[axis] - origin[axis]) / kCellMm, 0.0, 2097151.0);
+    const auto c = static_cast<std::uint64_t>(cell);
+    for (int bit = 0; bit < 21; ++bit) key |= ((c >> bit) & 1u) << (3 * bit + axis);
+  }
+  return key;
+}
+
+// Every `stride`-th scan point, in Z-order: neighbouring queries then walk the same part of
+// the k-d tree, which halves their cost on a randomly ordered scan.
+std::vector<std::uint32_t> thinned_in_space_order(const PointCloud& scan, std::size_t stride) {
+  // Non-finite points (NaN, inf) are left out here: they belong to no flange.
+  const auto finite = [&scan](std::size_t i) { return scan.points[i].allFinite(); };
+  Vec3 origin = Vec3::Constant(std::numeric_limits<double>::infinity());
+  for (std::size_t i = 0; i < scan.size(); i += stride)
+    if (finite(i)) origin = origin.cwiseMin(scan.points[i]);
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+  keyed.reserve(scan.size() / stride + 1);
+  for (std::size_t i = 0; i < scan.size(); i += stride)
+    if (finite(i))
+      keyed.emplace_back(morton_key(scan.points[i], origin), static_cast<std::uint32_t>(i));
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<std::uint32_t> order;
+  order.reserve(keyed.size());
+  for (const auto& k : keyed) order.push_back(k.second);
+  return order;
+}
+
+// The points of `order` per flange, by the label of their nearest model sample.
+std::vector<std::vector<std::uint32_t>> assign_points(const LocalFitTarget& target,
+                                                      const std::vector<std::int32_t>& labels,
+                                                      const PointCloud& scan,
+                                                      const std::vector<std::uint32_t>& order,
+                                                      const SpringbackSettings& st) {
+  std::vector<std::int32_t> flange_of(order.size(), kNoFlange);
+  for_each_block(
+      order.size(), kBlock, st.threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
+        for (std::size_t k = lo; k < hi; ++k) {
+          const auto nn = target.tree().nearest(scan.points[order[k]], st.assignment_distance_mm);
+          if (nn) flange_of[k] = labels[nn->index];
+        }
+      });
+  std::vector<std::vector<std::uint32_t>> out(target.model().segmentation.flanges.size());
+  for (std::size_t k = 0; k < order.size(); ++k)
+    if (flange_of[k] != kNoFlange) out[static_cast<std::size_t>(flange_of[k])].push_back(order[k]);
+  return out;
+}
+
+FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const Flange& flange,
+                     std::vector<std::uint32_t> indices, const SpringbackSettings& st) {
+  FlangeFit out;
+  out.flange_id = flange.id;
+  out.face_ids = flange.face_ids;
+  out.indices = std::move(indices);
+  if (out.indices.size() < static_cast<std::size_t>(std::max(st.min_points_per_flange, 3))) {
+    out.status = "flange " + std::to_string(flange.id) + ": " + std::to_string(out.indices.size()) +
+                 " points, fewer than min_points_per_flange " +
+                 std::to_string(st.min_points_per_flange);
+    return out;
+  }
+  LocalFitSettings fit_settings = st.local_fit;
+  fit_settings.threads = st.threads;
+  auto fit = local_fit(target, scan, out.indices, fit_settings);
+  if (!fit) {
+    out.status = "flange " + std::to_string(flange.id) + ": " + fit.message();
+    return out;
+  }
+  out.fit = std::move(fit).value();
+  out.fitted = true;
+  // The data's plane normal: the fit maps data onto the model, so its inverse maps the model
+  // normal back. A turn about the normal (left undetermined by the fit) does not change it.
+  out.measured_normal = out.fit.T_model_subset.linear().transpose() * flange.normal;
+  return out;
+}
+
+// The signed angle from u to v about `axis`, from the full angle between them (degrees).
+double turn_deg(const Vec3& u, const Vec3& v, const Vec3& axis) {
+  const Vec3 c = u.cross(v);
+  const double sine = c.dot(axis) < 0.0 ? -c.norm() : c.norm();
+  return std::atan2(sine, u.dot(v)) * kRadToDeg;
+}
+
+// The flange's normal on the concave side of `bend` (the side facing the bend's centre of
+// curvature), from where the flange's reference face lies relative to the bend axis: the
+// concave side's face has the axis in front of it at the inner radius Ri >= 0, the convex
+// side's face has it behind at Ri + t. The midway offset -t/2 decides, also for a sharp inner
+// corner (Ri = 0) and for a surface model (t = 0, where Ri > 0). Never decided from the angle:
+// at 90 degrees a normal and its opposite are equally near the nominal.
+Vec3 concave_normal(const Flange& flange, const Bend& bend) {
+  const Vec3 n = flange.normal.normalized();
+  const double axis_offset = (bend.axis_point - flange.point).dot(n);
+  return axis_offset >= -0.5 * flange.thickness_mm ? n : Vec3(-n);
+}
+
+// The direction about which the sheet turns from flange a into flange b, so that the bend's
+// turn is positive: the sheet leaves flange a towards the axis (in-plane, across the axis) and
+// curves towards its concave side. From positions, not from na x nb, which vanishes for a
+// closed hem (180 degrees) and would leave the sign of its springback to rounding.
+Vec3 turn_axis(const Flange& fa, const Vec3& concave_a, const Bend& bend) {
+  const Vec3 d = bend.axis_direction.normalized();
+  Vec3 towards = bend.axis_point - fa.point;
+  towards -= towards.dot(d) * d + towards.dot(concave_a) * concave_a;
+  const Vec3 w = towards.cross(concave_a);
+  return w.dot(d) < 0.0 ? Vec3(-d) : d;
+}
+
+// An angle difference in (-180, 180]: near 180 degrees a measured turn of -179.99 is 180.01,
+// so a closed hem that did not move has springback 0, not 359.99.
+double wrapped_deg(double a) { return std::remainder(a, 360.0); }
+
+}  // namespace
+
+BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
+                             const FlangeFit& a, const FlangeFit& b, double tolerance_deg) {
+  BendMeasurement m;
+  m.bend_id = bend.id;
+  m.flange_a = bend.flange_a;
+  m.flange_b = bend.flange_b;
+  m.face_ids = bend.face_ids;
+  m.axis_point = bend.axis_point;
+  m.radius_mm = bend.radius_mm;
+  m.nominal_angle_deg = bend.nominal_angle_deg;
+  m.angle_tolerance_deg = tolerance_deg;
+  // Both normals on the concave side of the sheet: the angle between them is the angle the
+  // sheet turns.
+  const Vec3 na = concave_normal(fa, bend), nb = concave_normal(fb, bend);
+  m.axis_direction = turn_axis(fa, na, bend);
+  if (!a.fitted || !b.fitted) {
+    m.status =
+        "bend " + std::to_string(bend.id) + " not measured: " + (a.fitted ? b.status : a.status);
+    return m;
+  }
+  // Paper section 4: D = R_a R_b^-1 is how flange b lies relative to flange a in the data,
+  // in the CAD frame; the measured bend angle is the angle between na and D nb (which equals
+  // the angle between the two fitted planes, whatever either fit did about its own normal).
+  const Mat3 D = relative_rotation_matrix(a.fit.T_model_subset, b.fit.T_model_subset);
+  m.relative_rotation = axis_angle_of(D);
+  const double nominal = turn_deg(na, nb, m.axis_direction);
+  const double measured =
+      measured_bend_angle_deg(na, nb, m.axis_direction, a.fit.T_model_subset, b.fit.T_model_subset);
+  m.springback_deg = wrapped_deg(nominal - measured);
+  m.measured_angle_deg = m.nominal_angle_deg - m.springback_deg;
+  const Vec3 line = a.measured_normal.cross(b.measured_normal);
+  m.measured_axis_direction =
+      line.dot(m.axis_direction) < 0.0 ? -line.normalized() : line.normalized();
+  m.measured = true;
+  m.pass = std::abs(m.springback_deg) <= tolerance_deg;
+  return m;
+}
+
+
+double measured_bend_angle_deg(const Vec3& normal_a, const Vec3& normal_b, const Vec3& axis,
+                               const Transform& T_model_a, const Transform& T_model_b) {
+  return turn_deg(normal_a, relative_rotation_matrix(T_model_a, T_model_b) * normal_b, axis);
+}
+
+Expected<SpringbackResult> measure_springback(const PartModel& model, const PointCloud& scan,
+                                              const SpringbackSettings& st) {
+  if (const std::string bad = check(model, st); !bad.empty())
+    return fail("measure_springback: " + bad);
+  const auto& seg = model.segmentation;
+  SpringbackResult result;
+  const auto cap = static_cast<std::size_t>(st.max_scan_points);
+  result.thinning_stride = cap == 0 || scan.size() <= cap ? 1 : (scan.size() + cap - 1) / cap;
+  result.points_used = (scan.size() + result.thinning_stride - 1) / result.thinning_stride;
+
+  // 1. Label the model samples by flange, leaving out a margin around the bends.
+  const auto labels = sample_labels(model, st.bend_margin_mm, st.threads);
+  // 2. Assign the (thinned) scan points to flanges by their nearest model sample.
+  const LocalFitTarget target(model);
+  const auto order = thinned_in_space_order(scan, result.thinning_stride);
+  auto assigned = assign_points(target, labels, scan, order, st);
+  // 3. Fit each flange locally to the whole model.
+  for (std::size_t f = 0; f < seg.flanges.size(); ++f)
+    result.flanges.push_back(fit_flange(target, scan, seg.flanges[f], std::move(assigned[f]), st));
+  // 4. Each bend from the relative rotation of its two flanges.
+  const auto index_of = [&seg](int id) {
+    const auto it = std::find_if(seg.flanges.begin(), seg.flanges.end(),
+                                 [id](const Flange& f) { return f.id == id; });
+    return static_cast<std::size_t>(it - seg.flanges.begin());
+  };
+  for (const Bend& bend : seg.bends) {
+    const std::size_t a = index_of(bend.flange_a), b = index_of(bend.flange_b);
+    result.bends.push_back(measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a],
+                                        result.flanges[b], st.angle_tolerance_deg));
+  }
+  return result;
+}
+
+}  // namespace springscan::analysis

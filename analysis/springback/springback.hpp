@@ -1,0 +1,100 @@
+#pragma once
+// Springback per bend by automatic multiple local best fits (paper section 4, automated as its
+// outlook proposes; docs/springback.md). The scan is already in the CAD frame (after the global
+// fit). Scan points are assigned to CAD flanges by their nearest model sample, leaving out a
+// margin around every bend; each flange is fitted to the whole model on its own (local_fit);
+// each bend's measured angle comes from the relative rotation of the two flanges it joins.
+//
+// Angle convention: the bend angle is the angle the sheet turns at the bend, i.e. the angle
+// between the two flanges' normals (0 = flat). springback = nominal - measured: positive when
+// the bend opened up.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "analysis/core/expected.hpp"
+#include "analysis/springback/local_fit.hpp"
+#include "analysis/core/part_model.hpp"
+#include "analysis/core/point_cloud.hpp"
+#include "analysis/springback/relative_rotation.hpp"
+
+namespace springscan::analysis {
+
+struct SpringbackSettings {
+  LocalFitSettings local_fit;           ///< each flange's local best fit (threads: see below)
+  double bend_margin_mm = 2.0;          ///< flange samples this close to a bend are left out
+  double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
+  double angle_tolerance_deg = 1.0;     ///< a bend passes when |springback| <= this (the
+                                        ///< pipeline copies verdict.angle_tolerance_deg)
+  int min_points_per_flange = 200;      ///< fewer: not fitted, its bends are not measured
+  /// The scan is thinned by a fixed stride to at most this many points (0: every point).
+  std::int64_t max_scan_points = 100000;
+  /// Worker threads, 0 = all cores (overrides local_fit.threads); the result does not depend
+  /// on it.
+  int threads = 0;
+};
+
+/// One flange's points and local best fit.
+struct FlangeFit {
+  int flange_id = -1;
+  std::vector<int> face_ids;
+  std::vector<std::uint32_t> indices;  ///< scan points assigned to the flange
+  bool fitted = false;
+  std::string status;  ///< why it was not fitted, or empty
+  LocalFitResult fit;
+  Vec3 measured_normal = Vec3::Zero();  ///< normal of the fitted plane in the CAD frame
+};
+
+/// One bend: nominal geometry from the CAD, measured angle from the local fits.
+struct BendMeasurement {
+  int bend_id = -1;
+  int flange_a = -1;  ///< Flange::id
+  int flange_b = -1;  ///< Flange::id
+  std::vector<int> face_ids;
+  Vec3 axis_point = Vec3::Zero();       ///< nominal bend axis, CAD frame
+  Vec3 axis_direction = Vec3::UnitX();  ///< unit, oriented so the nominal turn a -> b is positive
+  double radius_mm = 0.0;
+  double nominal_angle_deg = 0.0;
+  double measured_angle_deg = 0.0;
+  double springback_deg = 0.0;  ///< nominal - measured; > 0: the bend opened up
+  AxisAngle relative_rotation;  ///< flange b relative to flange a, CAD frame (paper §4)
+  Vec3 measured_axis_direction = Vec3::Zero();  ///< line of the two fitted planes, CAD frame
+  double angle_tolerance_deg = 0.0;
+  bool measured = false;  ///< false when a flange could not be fitted
+  bool pass = false;      ///< measured and |springback| <= tolerance
+  std::string status;     ///< why it was not measured, or empty
+};
+
+struct SpringbackResult {
+  std::vector<FlangeFit> flanges;  ///< in segmentation order
+  std::vector<BendMeasurement> bends;
+  std::size_t points_used = 0;  ///< scan points after thinning
+  std::size_t thinning_stride = 1;
+};
+
+/// The bend angle (degrees) between two flanges as the data show it: the angle from normal_a
+/// to D * normal_b, D = relative_rotation_matrix(T_model_a, T_model_b) (flange b relative to
+/// flange a in the data, CAD frame), positive about `axis`. It equals the angle between the
+/// two fitted planes, so it does not change when either fit is composed with a turn about its
+/// own flange normal or a slide in its plane: the motions a plane fit cannot determine.
+double measured_bend_angle_deg(const Vec3& normal_a, const Vec3& normal_b, const Vec3& axis,
+                               const Transform& T_model_a, const Transform& T_model_b);
+
+/// One bend from the local fits of its flanges `a` (of flange `fa`) and `b` (of `fb`): the
+/// nominal turn between the flanges' normals taken on the bend's concave side (decided from
+/// where each flange's reference face lies relative to the bend axis, so either side of the
+/// sheet may be the reference), the measured turn after the relative rotation of the fits, and
+/// springback = nominal - measured wrapped into (-180, 180]. A flange not fitted leaves the
+/// bend unmeasured with a status. Pure function.
+BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
+                             const FlangeFit& a, const FlangeFit& b, double tolerance_deg);
+
+/// Measures every bend of `model.segmentation` in `scan_in_cad`. A flange with too few points
+/// (or a failed fit) leaves its bends unmeasured with a status; that is not an error.
+/// Errors: model samples without normals or face ids, a bend naming an unknown flange, or
+/// settings out of range.
+Expected<SpringbackResult> measure_springback(const PartModel& model, const PointCloud& scan_in_cad,
+                                              const SpringbackSettings& settings = {});
+
+}  // namespace springscan::analysis

@@ -1,0 +1,100 @@
+#include "report/inspection_files.hpp"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <system_error>
+
+#include "analysis/deviation/deviation.hpp"
+#include "analysis/io/point_io.hpp"
+
+namespace springscan::report {
+
+using namespace springscan::analysis;
+namespace {
+
+std::string join(const std::string& dir, const char* name) {
+  return (std::filesystem::path(dir) / name).string();
+}
+
+}  // namespace
+
+double deviation_color_scale_mm(const v1::InspectionReport& report) {
+  const auto& deviation = report.deviation();
+  if (deviation.color_scale_mm() > 0.0 && std::isfinite(deviation.color_scale_mm())) {
+    return deviation.color_scale_mm();
+  }
+  if (deviation.tolerance_mm() > 0.0 && std::isfinite(deviation.tolerance_mm())) {
+    return 3.0 * deviation.tolerance_mm();
+  }
+  return 1.0;
+}
+
+Expected<std::string> report_to_json(const v1::InspectionReport& report) {
+  google::protobuf::util::JsonPrintOptions options;
+  options.add_whitespace = true;
+  options.always_print_primitive_fields = true;
+  options.preserve_proto_field_names = true;
+  std::string json;
+  const auto status = google::protobuf::util::MessageToJsonString(report, &json, options);
+  if (!status.ok()) return fail("cannot print the report as JSON: " + status.ToString());
+  return json;
+}
+
+Expected<v1::InspectionReport> report_from_json(std::string_view json) {
+  v1::InspectionReport report;
+  const auto status = google::protobuf::util::JsonStringToMessage(std::string(json), &report);
+  if (!status.ok()) return fail("cannot parse the report JSON: " + status.ToString());
+  return report;
+}
+
+Expected<std::string> format_deviation_ply(const PointCloud& cloud, double scale_mm) {
+  Surface deviation;
+  deviation.cloud = cloud;
+  if (deviation.cloud.has_scalars()) {
+    deviation.cloud.colors.resize(deviation.cloud.scalars.size());
+    for (std::size_t i = 0; i < deviation.cloud.scalars.size(); ++i) {
+      deviation.cloud.colors[i] = deviation_color(deviation.cloud.scalars[i], scale_mm);
+    }
+  }
+  PointWriteOptions ply;
+  ply.scalar_name = "signed_deviation_mm";
+  return format_ply(deviation, ply);
+}
+
+Expected<bool> write_inspection_files(const std::string& dir, const InspectionOutcome& outcome) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return fail("cannot create report directory '" + dir + "': " + ec.message());
+
+  auto json = report_to_json(outcome.report);
+  if (!json) return json.error();
+  if (auto written = write_file_atomically(join(dir, "report.json"), *json); !written) {
+    return written.error();
+  }
+
+  const std::string ply_path = join(dir, "deviation.ply");
+  auto ply = format_deviation_ply(outcome.deviation_cloud, deviation_color_scale_mm(outcome.report));
+  if (!ply) return fail(ply_path + ": " + ply.message());
+  if (auto written = write_file_atomically(ply_path, *ply); !written) return written.error();
+
+  // Last: a present report.pb means the other two files are complete (the daemon relies on it).
+  std::string pb;
+  if (!outcome.report.SerializeToString(&pb)) return fail("cannot serialize the report");
+  return write_file_atomically(join(dir, "report.pb"), pb);
+}
+
+Expected<v1::InspectionReport> read_report_pb(const std::string& path) {
+  auto bytes = read_file_bytes(path);
+  if (!bytes) return bytes.error();
+  v1::InspectionReport report;
+  if (!report.ParseFromString(*bytes)) {
+    return fail(path + ": not a springscan InspectionReport (protobuf parse failed, " +
+                std::to_string(bytes->size()) + " bytes)");
+  }
+  return report;
+}
+
+}  // namespace springscan::report

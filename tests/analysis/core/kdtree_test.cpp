@@ -1,0 +1,123 @@
+#include "analysis/core/kdtree.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <thread>
+
+#include "tests/analysis/synthetic.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+// Brute-force oracle (STYLE.md section 8): every point sorted by distance, ties by index.
+std::vector<Neighbor> brute_force(const std::vector<Vec3>& points, const Vec3& q) {
+  std::vector<Neighbor> all;
+  for (std::uint32_t i = 0; i < points.size(); ++i)
+    all.push_back({i, (points[i] - q).squaredNorm()});
+  std::sort(all.begin(), all.end(), [](const Neighbor& a, const Neighbor& b) {
+    return a.squared_distance < b.squared_distance ||
+           (a.squared_distance == b.squared_distance && a.index < b.index);
+  });
+  return all;
+}
+
+TEST(KdTree, EmptyTreeAnswersNothing) {
+  KdTree tree({});
+  EXPECT_TRUE(tree.empty());
+  EXPECT_FALSE(tree.nearest(Vec3::Zero()).has_value());
+  std::vector<Neighbor> out{{1, 1.0}};
+  tree.knn(Vec3::Zero(), 5, out);
+  EXPECT_TRUE(out.empty());
+  tree.radius(Vec3::Zero(), 10.0, out);
+  EXPECT_TRUE(out.empty());
+}
+
+TEST(KdTree, SinglePoint) {
+  KdTree tree({Vec3(1, 2, 3)});
+  auto n = tree.nearest(Vec3(1, 2, 4));
+  ASSERT_TRUE(n.has_value());
+  EXPECT_EQ(n->index, 0u);
+  EXPECT_DOUBLE_EQ(n->squared_distance, 1.0);
+  EXPECT_FALSE(tree.nearest(Vec3(1, 2, 4), 0.5).has_value());
+}
+
+TEST(KdTree, NearestMatchesBruteForce) {
+  const auto points = testing::uniform_points(5000, 1, -50.0, 50.0);
+  KdTree tree(points);
+  for (const auto& q : testing::uniform_points(300, 2, -50.0, 50.0)) {
+    const auto expected = brute_force(points, q);
+    auto n = tree.nearest(q);
+    ASSERT_TRUE(n.has_value());
+    EXPECT_DOUBLE_EQ(n->squared_distance, expected[0].squared_distance);
+  }
+}
+
+TEST(KdTree, NearestWithinRespectsTheBound) {
+  const auto points = testing::uniform_points(2000, 3, -50.0, 50.0);
+  KdTree tree(points);
+  for (const auto& q : testing::uniform_points(200, 4, -50.0, 50.0)) {
+    const double d = std::sqrt(brute_force(points, q)[0].squared_distance);
+    EXPECT_TRUE(tree.nearest(q, d * 1.001).has_value());
+    EXPECT_FALSE(tree.nearest(q, d * 0.999).has_value());
+  }
+}
+
+TEST(KdTree, KnnMatchesBruteForce) {
+  const auto points = testing::uniform_points(3000, 5, -50.0, 50.0);
+  KdTree tree(points);
+  std::vector<Neighbor> got;
+  for (const auto& q : testing::uniform_points(100, 6, -50.0, 50.0)) {
+    const auto expected = brute_force(points, q);
+    tree.knn(q, 12, got);
+    ASSERT_EQ(got.size(), 12u);
+    for (std::size_t i = 0; i < got.size(); ++i)
+      EXPECT_DOUBLE_EQ(got[i].squared_distance, expected[i].squared_distance);
+  }
+  tree.knn(Vec3::Zero(), 5000, got);  // more than the tree holds
+  EXPECT_EQ(got.size(), points.size());
+}
+
+TEST(KdTree, RadiusMatchesBruteForceAndIsInclusive) {
+  const auto points = testing::uniform_points(3000, 7, -50.0, 50.0);
+  KdTree tree(points);
+  std::vector<Neighbor> got;
+  for (const auto& q : testing::uniform_points(100, 8, -50.0, 50.0)) {
+    const auto all = brute_force(points, q);
+    // Just past the 21st point: sqrt then squaring may round below its exact distance.
+    const double r = std::sqrt(all[20].squared_distance) * (1.0 + 1e-12);
+    tree.radius(q, r, got);
+    std::size_t expected = 0;
+    while (expected < all.size() && all[expected].squared_distance <= r * r) ++expected;
+    EXPECT_EQ(got.size(), expected);
+    EXPECT_GE(got.size(), 21u);
+  }
+}
+
+TEST(KdTree, ConcurrentQueriesAgreeWithSerial) {
+  const auto points = testing::uniform_points(20000, 9, -50.0, 50.0);
+  const auto queries = testing::uniform_points(4000, 10, -50.0, 50.0);
+  KdTree tree(points);
+  std::vector<std::uint32_t> serial(queries.size()), parallel(queries.size());
+  for (std::size_t i = 0; i < queries.size(); ++i) serial[i] = tree.nearest(queries[i])->index;
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t) {
+    threads.emplace_back([&, t] {
+      for (std::size_t i = static_cast<std::size_t>(t); i < queries.size(); i += 4)
+        parallel[i] = tree.nearest(queries[i])->index;
+    });
+  }
+  for (auto& thread : threads) thread.join();
+  EXPECT_EQ(serial, parallel);
+}
+
+TEST(KdTree, SurvivesMove) {
+  KdTree a(testing::uniform_points(100, 11, -50.0, 50.0));
+  KdTree b = std::move(a);
+  EXPECT_EQ(b.size(), 100u);
+  EXPECT_TRUE(b.nearest(Vec3::Zero()).has_value());
+}
+
+}  // namespace
+}  // namespace springscan::analysis

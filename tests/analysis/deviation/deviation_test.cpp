@@ -1,0 +1,94 @@
+#include "analysis/deviation/deviation.hpp"
+
+#include <gtest/gtest.h>
+
+#include "tests/analysis/synthetic.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+// An exact distance to the plane z = 0 with normal +z.
+class PlaneDistance : public SurfaceDistance {
+ public:
+  SurfaceHit closest(const Vec3& q) const override {
+    return {q.z(), Vec3(q.x(), q.y(), 0.0), Vec3::UnitZ(), 0};
+  }
+};
+
+PartModel plane_model() {
+  PartModel model;
+  for (int x = 0; x <= 100; ++x)
+    for (int y = 0; y <= 50; ++y) {
+      model.samples.points.emplace_back(x, y, 0.0);
+      model.samples.normals.push_back(Vec3::UnitZ());
+    }
+  return model;
+}
+
+TEST(Deviation, SignedByTheSampleNormalWithStatistics) {
+  const PartModel model = plane_model();
+  const KdTree tree(model.samples.points);
+  // 100 points: 0.01 .. 1.00 mm above, except every 10th below.
+  std::vector<Vec3> scan;
+  for (int i = 1; i <= 100; ++i) scan.emplace_back(10.3 + i * 0.5, 20.7, (i % 10 ? 1 : -1) * 0.01 * i);
+  auto r = signed_deviation(scan, model, tree, {0.5, 0.0, 0});
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_FALSE(r->exact);
+  for (int i = 1; i <= 100; ++i)
+    EXPECT_NEAR(r->signed_distance_mm[static_cast<std::size_t>(i - 1)], (i % 10 ? 1 : -1) * 0.01 * i, 1e-12);
+  const auto& s = r->statistics;
+  EXPECT_NEAR(s.max_mm, 0.99, 1e-12);
+  EXPECT_NEAR(s.min_mm, -1.0, 1e-12);
+  EXPECT_NEAR(s.p95_mm, 0.95, 1e-12);  // nearest rank of |d| = 0.01 .. 1.00
+  EXPECT_NEAR(s.fraction_out_of_tolerance, 0.5, 1e-12);
+  EXPECT_EQ(s.points, 100u);
+}
+
+TEST(Deviation, UsesTheExactSurfaceWhenTheModelHasOne) {
+  PartModel model = plane_model();
+  model.distance = std::make_shared<PlaneDistance>();
+  const KdTree tree(model.samples.points);
+  auto r = signed_deviation({Vec3(0.5, 0.5, 0.25), Vec3(500, 500, -2)}, model, tree);
+  ASSERT_TRUE(r);
+  EXPECT_TRUE(r->exact);
+  EXPECT_DOUBLE_EQ(r->signed_distance_mm[0], 0.25);
+  EXPECT_DOUBLE_EQ(r->signed_distance_mm[1], -2.0);
+}
+
+TEST(Deviation, ThreadCountDoesNotChangeTheResult) {
+  const PointCloud part = testing::bumpy_surface(20000, 43);
+  PartModel model;
+  model.samples = part;
+  const KdTree tree(part.points);
+  PointCloud scan = testing::bumpy_surface(30000, 44);
+  testing::add_noise(scan.points, 0.1, 45);
+  auto one = signed_deviation(scan.points, model, tree, {0.2, 0.0, 1});
+  auto three = signed_deviation(scan.points, model, tree, {0.2, 0.0, 3});
+  ASSERT_TRUE(one && three);
+  EXPECT_EQ(one->signed_distance_mm, three->signed_distance_mm);
+  EXPECT_EQ(one->statistics.mean_mm, three->statistics.mean_mm);
+  EXPECT_NEAR(one->statistics.rms_mm, 0.1, 0.02);  // the noise along the normal
+}
+
+TEST(Deviation, ColourMapEndsAndMiddle) {
+  EXPECT_EQ(deviation_color(0.0, 1.0), (Rgb{0, 255, 0}));
+  EXPECT_EQ(deviation_color(1.0, 1.0), (Rgb{255, 0, 0}));
+  EXPECT_EQ(deviation_color(-5.0, 1.0), (Rgb{0, 0, 255}));
+  EXPECT_EQ(deviation_color(0.5, 1.0), (Rgb{128, 128, 0}));
+}
+
+TEST(Deviation, BadInputs) {
+  PartModel model = plane_model();
+  const KdTree tree(model.samples.points);
+  EXPECT_FALSE(signed_deviation({Vec3(NAN, 0, 0)}, model, tree));
+  EXPECT_FALSE(signed_deviation({Vec3(0, 0, 0)}, model, tree, {0.0, 0.0, 0}));
+  PartModel no_normals = model;
+  no_normals.samples.normals.clear();
+  EXPECT_FALSE(signed_deviation({Vec3(0, 0, 0)}, no_normals, tree));
+  auto empty = signed_deviation({}, model, tree);
+  ASSERT_TRUE(empty);
+  EXPECT_EQ(empty->statistics.points, 0u);
+}
+
+}  // namespace
+}  // namespace springscan::analysis

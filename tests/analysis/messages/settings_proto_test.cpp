@@ -1,0 +1,100 @@
+#include "analysis/messages/settings_proto.hpp"
+
+#include <google/protobuf/text_format.h>
+#include <gtest/gtest.h>
+
+namespace springscan::analysis {
+namespace {
+
+v1::AnalysisSettings parse(const std::string& text) {
+  v1::AnalysisSettings m;
+  EXPECT_TRUE(google::protobuf::TextFormat::ParseFromString(text, &m)) << text;
+  return m;
+}
+
+TEST(SettingsProto, UnsetFieldsKeepTheStructDefaults) {
+  const v1::AnalysisSettings m;
+  auto fit = from_proto(m.registration());
+  ASSERT_TRUE(fit);
+  const GlobalFitSettings defaults;
+  EXPECT_EQ(fit->icp.max_iterations, defaults.icp.max_iterations);
+  EXPECT_EQ(fit->icp.trimmed_fraction, defaults.icp.trimmed_fraction);
+  EXPECT_EQ(fit->pca_initial_alignment, defaults.pca_initial_alignment);
+  auto reduction = from_proto(m.reduction());
+  ASSERT_TRUE(reduction);
+  EXPECT_EQ(reduction->kcenter.radius_mm, 10.0);
+  EXPECT_EQ(from_proto(m.normals())->k_neighbors, 10);
+  EXPECT_EQ(from_proto(m.deviation())->tolerance_mm, DeviationSettings{}.tolerance_mm);
+}
+
+TEST(SettingsProto, SetFieldsOverride) {
+  const auto m = parse(R"(
+    normals { k_neighbors: 16 radius_mm: 2.5 }
+    reduction { kcenter_radius_mm: 7 kcenter_count: 300 voxel_size_mm: 1.5 min_curvature: 0.02 }
+    registration { method: POINT_TO_POINT max_iterations: 12 robust_kernel: TUKEY
+                   kernel_scale_mm: 0.3 trimmed_fraction: 0.2 pca_initial_alignment: false
+                   error_ratio_stop: 0.999 max_correspondence_distance_mm: 4 min_error_mm: 0.001 }
+    deviation { tolerance_mm: 0.25 }
+    threads: 2)");
+  auto normals = from_proto(m.normals());
+  auto reduction = from_proto(m.reduction());
+  auto fit = from_proto(m.registration());
+  auto deviation = from_proto(m.deviation());
+  ASSERT_TRUE(normals && reduction && fit && deviation);
+  EXPECT_EQ(normals->k_neighbors, 16);
+  EXPECT_EQ(normals->radius_mm, 2.5);
+  EXPECT_EQ(reduction->kcenter.radius_mm, 7.0);
+  EXPECT_EQ(reduction->kcenter.center_count, 300u);
+  EXPECT_EQ(reduction->voxel_size_mm, 1.5);
+  EXPECT_EQ(reduction->curvature.min_curvature, 0.02);
+  EXPECT_EQ(fit->icp.method, IcpMethod::kPointToPoint);
+  EXPECT_EQ(fit->icp.kernel, RobustKernel::kTukey);
+  EXPECT_EQ(fit->icp.max_iterations, 12);
+  EXPECT_EQ(fit->icp.kernel_scale_mm, 0.3);
+  EXPECT_EQ(fit->icp.trimmed_fraction, 0.2);
+  EXPECT_EQ(fit->icp.error_ratio_stop, 0.999);
+  EXPECT_EQ(fit->icp.max_correspondence_distance_mm, 4.0);
+  EXPECT_EQ(fit->icp.min_error_mm, 0.001);
+  EXPECT_FALSE(fit->pca_initial_alignment);
+  EXPECT_EQ(deviation->tolerance_mm, 0.25);
+  EXPECT_EQ(*threads_from_proto(m), 2);
+}
+
+TEST(SettingsProto, ErrorsNameTheFieldAndValue) {
+  auto expect_error = [](const Expected<GlobalFitSettings>& r, const std::string& field) {
+    ASSERT_FALSE(r);
+    EXPECT_NE(r.message().find(field), std::string::npos) << r.message();
+  };
+  expect_error(from_proto(parse("registration { trimmed_fraction: 1.5 }").registration()),
+               "registration.trimmed_fraction = 1.5");
+  expect_error(from_proto(parse("registration { max_iterations: -3 }").registration()),
+               "registration.max_iterations = -3");
+  expect_error(from_proto(parse("registration { kernel_scale_mm: 0 }").registration()),
+               "registration.kernel_scale_mm");
+  v1::RegistrationSettings bad_enum;
+  bad_enum.set_method(static_cast<v1::RegistrationSettings::Method>(9));
+  expect_error(from_proto(bad_enum), "registration.method");
+  auto k = from_proto(parse("normals { k_neighbors: 100000000 }").normals());
+  ASSERT_FALSE(k);
+  EXPECT_NE(k.message().find("normals.k_neighbors"), std::string::npos);
+  EXPECT_FALSE(from_proto(parse("reduction { kcenter_radius_mm: -1 }").reduction()));
+  EXPECT_FALSE(from_proto(parse("reduction { voxel_size_mm: nan }").reduction()));
+  EXPECT_FALSE(from_proto(parse("deviation { tolerance_mm: 0 }").deviation()));
+  EXPECT_FALSE(threads_from_proto(parse("threads: -1")));
+}
+
+TEST(SettingsProto, RoundTripOfTheSettingsInForce) {
+  GlobalFitSettings fit;
+  fit.icp.max_iterations = 17;
+  fit.icp.kernel = RobustKernel::kNone;
+  v1::RegistrationSettings m;
+  to_proto(fit, &m);
+  auto back = from_proto(m);
+  ASSERT_TRUE(back);
+  EXPECT_EQ(back->icp.max_iterations, 17);
+  EXPECT_EQ(back->icp.kernel, RobustKernel::kNone);
+  EXPECT_EQ(back->icp.trimmed_fraction, fit.icp.trimmed_fraction);
+}
+
+}  // namespace
+}  // namespace springscan::analysis

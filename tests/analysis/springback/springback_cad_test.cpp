@@ -1,0 +1,58 @@
+// Springback measured on a PartModel built the production way: the profile as an OpenCASCADE
+// shape, sampled (sample_cad) and segmented (segment_cad) like an imported IGES/STEP part.
+#include <gtest/gtest.h>
+
+#include "simulators/parts/cad_profile.hpp"
+#include "analysis/cad/sampling.hpp"
+#include "analysis/cad/segmentation.hpp"
+#include "simulators/parts/sheet_part.hpp"
+#include "analysis/springback/springback.hpp"
+
+namespace springscan::analysis {
+using namespace springscan::parts;  // test and demo parts (simulators/parts)
+namespace {
+
+PartModel cad_model(const ProfileSpec& spec) {
+  const auto shape = make_profile_shape(spec);
+  EXPECT_TRUE(shape.ok()) << shape.message();
+  PartModel model;
+  auto samples = sample_cad(*shape, {.sample_count = 20000});
+  EXPECT_TRUE(samples.ok()) << samples.message();
+  model.samples = std::move(samples).value();
+  model.segmentation = segment_cad(*shape);
+  model.face_count = shape->face_count();
+  return model;
+}
+
+void expect_springback_on_cad(ProfileSpec spec, const std::vector<double>& springback_deg) {
+  const PartModel model = cad_model(spec);
+  ASSERT_EQ(model.segmentation.bends.size(), springback_deg.size());
+  ScanSimulationSettings st;
+  st.point_count = 40000;
+  st.noise_sigma_mm = 0.02;
+  const auto scan = simulate_scan(spec, springback_deg, st);  // the reference side
+  ASSERT_TRUE(scan.ok());
+  const auto result = measure_springback(model, *scan);
+  ASSERT_TRUE(result.ok()) << result.message();
+  for (const BendMeasurement& bend : result->bends) {
+    ASSERT_TRUE(bend.measured) << bend.status;
+    // segment_cad numbers bends by their smallest face id, i.e. in path order here.
+    const double truth = springback_deg[static_cast<std::size_t>(bend.bend_id)];
+    EXPECT_NEAR(bend.springback_deg, truth, 0.05) << "bend " << bend.bend_id;
+    EXPECT_NEAR(bend.nominal_angle_deg,
+                std::abs(spec.bend_angles_deg[static_cast<std::size_t>(bend.bend_id)]), 1e-6);
+  }
+}
+
+TEST(SpringbackCad, SurfaceModelOfAZProfile) {
+  expect_springback_on_cad(z_profile(40, 35, 75, 4), {1.5, -0.5});
+}
+
+TEST(SpringbackCad, SolidSheetWithBothSidesOfAHatProfile) {
+  ProfileSpec spec = hat_profile(25, 30, 40, 85, 4);
+  spec.thickness_mm = 1.5;
+  expect_springback_on_cad(spec, {1.0, 2.0, 0.5, 1.5});
+}
+
+}  // namespace
+}  // namespace springscan::analysis
