@@ -7,8 +7,8 @@
 #include <random>
 
 #include "analysis/cad/distance.hpp"
-#include "simulators/parts/cad_profile.hpp"
 #include "analysis/cad/sampling.hpp"
+#include "simulators/parts/cad_profile.hpp"
 
 namespace {
 
@@ -45,7 +45,10 @@ void BM_LoadTessellateSample100k(benchmark::State& state) {
     state.counters["triangles"] = shape->report().triangles;
   }
 }
-BENCHMARK(BM_LoadTessellateSample100k)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_LoadTessellateSample100k)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 // 1M queries scattered within +-2 mm of the surface (a scan after registration), 2 threads.
 void BM_Distance1M(benchmark::State& state) {
@@ -65,7 +68,12 @@ void BM_Distance1M(benchmark::State& state) {
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(queries.size()));
 }
-BENCHMARK(BM_Distance1M)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_Distance1M)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 }  // namespace
 

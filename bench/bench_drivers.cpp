@@ -23,8 +23,8 @@ std::vector<std::uint8_t> laser_stream(std::size_t profiles, std::size_t points)
   for (std::size_t k = 0; k < profiles; ++k) {
     for (std::size_t i = 0; i < points; ++i)
       line[i] = {float(i) * 0.1f - 100.0f, 180.0f + noise(rng)};
-    const auto payload = d::encode_laser_profile(static_cast<std::uint32_t>(k), double(k) * 0.5,
-                                                 k * 1000, line);
+    const auto payload =
+        d::encode_laser_profile(static_cast<std::uint32_t>(k), double(k) * 0.5, k * 1000, line);
     d::append_frame(stream, p::MessageType::kLaserProfile, static_cast<std::uint32_t>(k), payload);
   }
   return stream;
@@ -36,8 +36,8 @@ std::vector<std::uint8_t> probe_stream(std::size_t frames) {
   for (std::size_t i = 0; i < records.size(); ++i)
     records[i] = {{double(i), 2.0 * double(i), 30.0}, {0.0f, 0.0f, -1.0f}, 1.5f};
   for (std::size_t k = 0; k < frames; ++k) {
-    const auto payload = d::encode_probe_batch(static_cast<std::uint32_t>(k * records.size()), 0,
-                                               records);
+    const auto payload =
+        d::encode_probe_batch(static_cast<std::uint32_t>(k * records.size()), 0, records);
     d::append_frame(stream, p::MessageType::kProbePoints, static_cast<std::uint32_t>(k), payload);
   }
   return stream;

@@ -77,9 +77,15 @@ const Instance& cached(const std::function<Instance()>& make, int which) {
   return *cache[static_cast<std::size_t>(which)];
 }
 
-const Instance& random_1000() { return cached([] { return random_instance(1000); }, 0); }
-const Instance& surface_1000() { return cached([] { return surface_instance(1000); }, 1); }
-const Instance& surface_4096() { return cached([] { return surface_instance(4096); }, 2); }
+const Instance& random_1000() {
+  return cached([] { return random_instance(1000); }, 0);
+}
+const Instance& surface_1000() {
+  return cached([] { return surface_instance(1000); }, 1);
+}
+const Instance& surface_4096() {
+  return cached([] { return surface_instance(4096); }, 2);
+}
 // A large deformation: 8 degrees of springback per bend moves the flange tips by several point
 // spacings, so the k = 32 candidate graph has no perfect matching and k is widened.
 const Instance& surface_4096_8deg() {
@@ -138,8 +144,10 @@ double process_cpu_ms() {
 int export_instances(const std::string& dir) {
   std::ofstream summary(dir + "/ours.txt");
   const std::pair<const Instance*, std::pair<const char*, PointMatchingSettings>> runs[] = {
-      {&random_1000(), {"dense", kDense}},   {&surface_1000(), {"dense", kDense}},
-      {&surface_1000(), {"sparse", kSparse}}, {&surface_4096(), {"sparse", kSparse}}};
+      {&random_1000(), {"dense", kDense}},
+      {&surface_1000(), {"dense", kDense}},
+      {&surface_1000(), {"sparse", kSparse}},
+      {&surface_4096(), {"sparse", kSparse}}};
   for (const auto& [inst, solver] : runs) {
     write_points(dir + "/" + inst->name + "_model.txt", inst->model);
     write_points(dir + "/" + inst->name + "_scan.txt", inst->scan);
@@ -150,8 +158,7 @@ int export_instances(const std::string& dir) {
       const auto t0 = std::chrono::steady_clock::now();
       const auto m = match_points(inst->model, inst->scan, solver.second);
       wall_ms.push_back(
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-              .count());
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       cpu_ms.push_back(process_cpu_ms() - cpu0);
       if (!m.ok() || !m->certified) return 1;
       cost = m->total_cost;

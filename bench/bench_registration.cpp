@@ -84,8 +84,12 @@ void BM_Inspection1MScan100kModel(benchmark::State& state) {
   state.counters["rms_final_mm"] = last.global_fit().rms_final();
   state.counters["deviation_rms_mm"] = last.deviation().rms();
 }
-BENCHMARK(BM_Inspection1MScan100kModel)->Arg(2)->Arg(1)->Unit(benchmark::kMillisecond)
-    ->UseRealTime()->MeasureProcessCPUTime();
+BENCHMARK(BM_Inspection1MScan100kModel)
+    ->Arg(2)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
 
 }  // namespace
 

@@ -7,8 +7,8 @@
 #include <memory>
 #include <numbers>
 
-#include "simulators/parts/sheet_part.hpp"
 #include "analysis/springback/springback.hpp"
+#include "simulators/parts/sheet_part.hpp"
 
 namespace {
 
@@ -53,8 +53,8 @@ void BM_MeasureSpringback(benchmark::State& state) {
       return;
     }
     for (std::size_t b = 0; b < result->bends.size(); ++b)
-      worst_error = std::max(worst_error,
-                             std::abs(result->bends[b].springback_deg - kSpringbackDeg[b]));
+      worst_error =
+          std::max(worst_error, std::abs(result->bends[b].springback_deg - kSpringbackDeg[b]));
   }
   state.counters["worst_error_deg"] = worst_error;
   state.SetItemsProcessed(state.iterations() * state.range(0));

@@ -5,15 +5,15 @@
 // box diagonal / 150) against 100k model samples; a trial succeeds when 95 % of the fitted scan
 // points lie within 0.1 mm of the model surface. Usage: fit_coverage [trials per row]
 #include <algorithm>
-#include <ctime>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <random>
 #include <string>
 
-#include "analysis/registration/global_fit.hpp"
 #include "analysis/preprocess/reduction.hpp"
 #include "analysis/preprocess/voxel.hpp"
+#include "analysis/registration/global_fit.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {
@@ -89,7 +89,8 @@ int main(int argc, char** argv) {
         const std::clock_t t0 = std::clock();  // process CPU time, all threads
         auto fit = global_fit(fit_points, tree, model.normals);
         ms.push_back(1000.0 * static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC);
-        const bool good = fit && surface_p95(scan.points, fit->T_cad_scan, tree, model.normals) < 0.1;
+        const bool good =
+            fit && surface_p95(scan.points, fit->T_cad_scan, tree, model.normals) < 0.1;
         if (good) ++ok;
         if (!good && std::getenv("DIAG")) {
           // Oracle: the true rotation, centroids aligned, then ICP.
@@ -105,13 +106,16 @@ int main(int argc, char** argv) {
           for (auto& p : scan.points) moved.push_back(start * p);
           auto f2 = global_fit(moved, tree, model.normals, s);
           const double r = f2 ? surface_p95(moved, f2->T_cad_scan, tree, model.normals) : -1;
-          std::printf("   fail trial %d from %.2f: p95 %.2f ambiguity %.3f best %zu; oracle-rotation p95 %.3f\n", t, from,
-                      fit ? surface_p95(scan.points, fit->T_cad_scan, tree, model.normals) : -1.0,
-                      fit ? fit->pca.ambiguity : 0.0, fit ? fit->pca.best_candidate : 0, r);
+          std::printf(
+              "   fail trial %d from %.2f: p95 %.2f ambiguity %.3f best %zu; oracle-rotation p95 "
+              "%.3f\n",
+              t, from, fit ? surface_p95(scan.points, fit->T_cad_scan, tree, model.normals) : -1.0,
+              fit ? fit->pca.ambiguity : 0.0, fit ? fit->pca.best_candidate : 0, r);
         }
       }
       std::sort(ms.begin(), ms.end());
-      std::printf("%-12s %-9.2f %3d/%-4d %.0f\n", part.name.c_str(), c, ok, trials, ms[ms.size() / 2]);
+      std::printf("%-12s %-9.2f %3d/%-4d %.0f\n", part.name.c_str(), c, ok, trials,
+                  ms[ms.size() / 2]);
       std::fflush(stdout);
     }
   }

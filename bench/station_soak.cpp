@@ -23,8 +23,8 @@
 #include <thread>
 #include <vector>
 
-#include "simulators/parts/sheet_part.hpp"
 #include "proto/springscan.pb.h"
+#include "simulators/parts/sheet_part.hpp"
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
 #include "tests/daemon/daemon_process.hpp"
@@ -39,9 +39,9 @@ using Clock = std::chrono::steady_clock;
 struct Options {
   int cycles = 20;
   int points_per_profile = 1000;
-  double step_mm = 0.4;          // 1000 x 201 profiles over the 80 mm width: ~200k points
-  double scan_s = 1.0;           // the simulated scan's duration (device pacing)
-  long surface_points = 1200000; // dense enough that nearly every bin sees the surface
+  double step_mm = 0.4;           // 1000 x 201 profiles over the 80 mm width: ~200k points
+  double scan_s = 1.0;            // the simulated scan's duration (device pacing)
+  long surface_points = 1200000;  // dense enough that nearly every bin sees the surface
 };
 
 double percentile(std::vector<double> v, double q) {
@@ -163,10 +163,9 @@ int main(int argc, char** argv) {
                         << "\"\nreport_retention: 5\nlog_level: \"error\"\n";
   int result = 0;
   {
-    daemon::testing::DaemonProcess station(
-        SPRINGSCAND_EXE, config, dir.string(),
-        {"LD_PRELOAD=" + simulators::umockdev_preload_library(),
-         "UMOCKDEV_DIR=" + (*emulator)->root_dir()});
+    daemon::testing::DaemonProcess station(SPRINGSCAND_EXE, config, dir.string(),
+                                           {"LD_PRELOAD=" + simulators::umockdev_preload_library(),
+                                            "UMOCKDEV_DIR=" + (*emulator)->root_dir()});
     simulators::PlcClientSettings settings;
     settings.port = station.port();
     settings.step_timeout_s = 300;
@@ -216,10 +215,11 @@ int main(int argc, char** argv) {
     for (auto& t : pollers) t.join();
     std::printf("cycle 1 (loads the CAD model): trigger->valid minus %.2f s scan: %.0f ms\n",
                 o.scan_s, first_minus_scan);
-    std::printf("cycles 2..%d: trigger->valid minus scan: median %.0f ms, p95 %.0f ms, max %.0f "
-                "ms; analysis (report timings total) median %.0f ms\n",
-                o.cycles, percentile(minus_scan, 0.5), percentile(minus_scan, 0.95),
-                percentile(minus_scan, 1.0), percentile(analysis_ms, 0.5));
+    std::printf(
+        "cycles 2..%d: trigger->valid minus scan: median %.0f ms, p95 %.0f ms, max %.0f "
+        "ms; analysis (report timings total) median %.0f ms\n",
+        o.cycles, percentile(minus_scan, 0.5), percentile(minus_scan, 0.95),
+        percentile(minus_scan, 1.0), percentile(analysis_ms, 0.5));
     std::printf("modbus responses %zu: p50 %.2f ms, p99 %.2f ms, max %.2f ms\n", times.all.size(),
                 percentile(times.all, 0.5), percentile(times.all, 0.99),
                 percentile(times.all, 1.0));
@@ -229,9 +229,11 @@ int main(int argc, char** argv) {
     for (const auto& [cycle, u] : samples)
       std::printf("after cycle %d: RSS %ld kB, open fds %ld\n", cycle, u.rss_kb, u.fds);
     const int later = std::max(1, o.cycles - 1);
-    std::printf("springscand CPU: %.2f s for cycles 2..%d (%.0f ms per cycle); wall %.1f s for "
-                "all %d cycles\n", end.cpu_s - after_first.cpu_s, o.cycles,
-                1000.0 * (end.cpu_s - after_first.cpu_s) / later, wall_s, o.cycles);
+    std::printf(
+        "springscand CPU: %.2f s for cycles 2..%d (%.0f ms per cycle); wall %.1f s for "
+        "all %d cycles\n",
+        end.cpu_s - after_first.cpu_s, o.cycles, 1000.0 * (end.cpu_s - after_first.cpu_s) / later,
+        wall_s, o.cycles);
   }
   fs::remove_all(dir);
   return result;

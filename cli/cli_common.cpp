@@ -12,11 +12,16 @@ namespace {
 
 const char* level_name(LogLevel level) {
   switch (level) {
-    case LogLevel::kDebug: return "debug";
-    case LogLevel::kInfo: return "info";
-    case LogLevel::kWarning: return "warning";
-    case LogLevel::kError: return "error";
-    case LogLevel::kQuiet: return "quiet";
+    case LogLevel::kDebug:
+      return "debug";
+    case LogLevel::kInfo:
+      return "info";
+    case LogLevel::kWarning:
+      return "warning";
+    case LogLevel::kError:
+      return "error";
+    case LogLevel::kQuiet:
+      return "quiet";
   }
   return "?";
 }
@@ -90,7 +95,8 @@ ArgParser::Outcome ArgParser::parse(int argc, char** argv, int first) {
         error_ = "option --" + name + " takes no value";
         return Outcome::kUsageError;
       }
-      values_.insert_or_assign(name, std::string(1, '1'));  // not ="1": g++ 12 -Wrestrict false positive
+      values_.insert_or_assign(name,
+                               std::string(1, '1'));  // not ="1": g++ 12 -Wrestrict false positive
     } else if (inline_value) {
       values_[name] = *inline_value;
     } else if (i + 1 < argc) {
@@ -117,8 +123,10 @@ std::string ArgParser::help() const {
   for (const auto& name : order_) {
     const Spec& spec = specs_.at(name);
     std::string left = "  --" + name + (spec.value_name.empty() ? "" : " " + spec.value_name);
-    if (left.size() < 30) left.resize(30, ' ');
-    else left += "\n" + std::string(30, ' ');
+    if (left.size() < 30)
+      left.resize(30, ' ');
+    else
+      left += "\n" + std::string(30, ' ');
     out << left << spec.help << '\n';
   }
   return out.str();
@@ -159,9 +167,12 @@ bool ArgParser::configure_logger(Logger& logger) {
 
 std::optional<int> ArgParser::start(int argc, char** argv, Logger& logger) {
   switch (parse(argc, argv, 2)) {
-    case Outcome::kHelpShown: return kExitOk;
-    case Outcome::kUsageError: return fail_with(command_, error_, kExitUsage);
-    case Outcome::kRun: break;
+    case Outcome::kHelpShown:
+      return kExitOk;
+    case Outcome::kUsageError:
+      return fail_with(command_, error_, kExitUsage);
+    case Outcome::kRun:
+      break;
   }
   if (!configure_logger(logger)) return fail_with(command_, error_, kExitUsage);
   return std::nullopt;

@@ -9,14 +9,14 @@
 #include <string>
 
 #include "analysis/cad/model.hpp"
-#include "analysis/messages/cad_model_proto.hpp"
-#include "analysis/io/file_io.hpp"
-#include "analysis/inspection/pipeline.hpp"
-#include "analysis/io/point_io.hpp"
 #include "analysis/cad/point_model.hpp"
-#include "report/inspection_files.hpp"
+#include "analysis/inspection/pipeline.hpp"
+#include "analysis/io/file_io.hpp"
+#include "analysis/io/point_io.hpp"
 #include "analysis/io/sha256.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
 #include "cli/cli_common.hpp"
+#include "report/inspection_files.hpp"
 #include "report/report_html.hpp"
 
 namespace springscan::cli {
@@ -79,11 +79,11 @@ analysis::Expected<analysis::PartModel> load_point_model(const std::string& path
 void print_summary(const v1::InspectionReport& report, const std::string& out_dir) {
   std::printf("verdict: %s\n", report.verdict().pass() ? "PASS" : "FAIL");
   for (const auto& reason : report.verdict().reasons()) std::printf("  - %s\n", reason.c_str());
-  std::printf("global fit: rms %.4f mm after %d iterations; deviation p95 %.4f mm, "
-              "%.1f%% beyond %.3g mm\n",
-              report.global_fit().rms_final(), report.global_fit().iterations(),
-              report.deviation().p95(), 100.0 * report.deviation().fraction_out_of_tolerance(),
-              report.deviation().tolerance_mm());
+  std::printf(
+      "global fit: rms %.4f mm after %d iterations; deviation p95 %.4f mm, "
+      "%.1f%% beyond %.3g mm\n",
+      report.global_fit().rms_final(), report.global_fit().iterations(), report.deviation().p95(),
+      100.0 * report.deviation().fraction_out_of_tolerance(), report.deviation().tolerance_mm());
   for (const auto& bend : report.bends()) {
     if (!bend.measured()) {
       std::printf("bend %d: nominal %.2f deg, not measured\n", bend.id(), bend.nominal_angle_deg());
@@ -132,8 +132,9 @@ int analyze_main(int argc, char** argv) {
     if (!args.has(name)) continue;
     const auto value = args.get_number(name);
     if (!value || !(*value > 0.0))
-      return fail_with(kName, std::string("--") + name + " " + args.get(name) +
-                                  ": expected a positive number", kExitUsage);
+      return fail_with(
+          kName, std::string("--") + name + " " + args.get(name) + ": expected a positive number",
+          kExitUsage);
     if (std::string(name) == "tolerance") {
       settings.mutable_deviation()->set_tolerance_mm(*value);
       settings.mutable_verdict()->set_tolerance_mm(*value);

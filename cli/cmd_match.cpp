@@ -7,10 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/matching/deformation_field.hpp"
 #include "analysis/io/file_io.hpp"
-#include "analysis/preprocess/kcenter.hpp"
 #include "analysis/io/point_io.hpp"
+#include "analysis/matching/deformation_field.hpp"
+#include "analysis/preprocess/kcenter.hpp"
 #include "cli/cli_common.hpp"
 
 namespace springscan::cli {
@@ -65,8 +65,7 @@ std::string summary(const analysis::DeformationField& field, double ms) {
                 field.scan_points, field.total_cost_mm2, field.coverage,
                 field.nearest_neighbor_coverage,
                 field.method == analysis::CorrespondenceMethod::kMinCostMatching
-                    ? (field.optimality_certified ? ", optimality certified"
-                                                  : ", NOT certified")
+                    ? (field.optimality_certified ? ", optimality certified" : ", NOT certified")
                     : "",
                 ms);
   return text;
@@ -113,8 +112,9 @@ int match_main(int argc, char** argv) {
   if (args.has("reduce-radius")) {
     const auto radius = args.get_number("reduce-radius");
     if (!radius || !(*radius > 0.0) || !std::isfinite(*radius)) {
-      return fail_with(kName, "--reduce-radius " + args.get("reduce-radius") +
-                                  ": expected a radius > 0 in mm", kExitUsage);
+      return fail_with(
+          kName, "--reduce-radius " + args.get("reduce-radius") + ": expected a radius > 0 in mm",
+          kExitUsage);
     }
     w = *radius;
   }
@@ -126,16 +126,17 @@ int match_main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::uint32_t> model_index, scan_index;
   const auto model_points = reduce(model->points, w, model_index);
-  if (!model_points) return fail_with(kName, args.get("model") + ": " + model_points.message(),
-                                      kExitAnalysisFailed);
+  if (!model_points)
+    return fail_with(kName, args.get("model") + ": " + model_points.message(), kExitAnalysisFailed);
   const auto scan_points = reduce(scan->points, w, scan_index);
-  if (!scan_points) return fail_with(kName, args.get("scan") + ": " + scan_points.message(),
-                                     kExitAnalysisFailed);
+  if (!scan_points)
+    return fail_with(kName, args.get("scan") + ": " + scan_points.message(), kExitAnalysisFailed);
   const auto field = analysis::deformation_field(*model_points, *scan_points, settings);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!field) return fail_with(kName, field.message(), kExitAnalysisFailed);
-  if (const auto written = analysis::write_file_atomically(args.get("out"), format_pairs(*field, model_index, scan_index));
+  if (const auto written = analysis::write_file_atomically(
+          args.get("out"), format_pairs(*field, model_index, scan_index));
       !written) {
     return fail_with(kName, written.message(), kExitAnalysisFailed);
   }

@@ -35,7 +35,8 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
-std::string as_json(const analysis::CadLoadReport& r, const std::vector<analysis::CadFaceInfo>& faces,
+std::string as_json(const analysis::CadLoadReport& r,
+                    const std::vector<analysis::CadFaceInfo>& faces,
                     const analysis::PartSegmentation& s) {
   std::ostringstream o;
   o.precision(10);
@@ -66,8 +67,8 @@ std::string as_json(const analysis::CadLoadReport& r, const std::vector<analysis
   for (std::size_t i = 0; i < s.bends.size(); ++i) {
     const auto& b = s.bends[i];
     o << (i ? "," : "") << "\n    {\"id\": " << b.id << ", \"faces\": " << ids(b.face_ids)
-      << ", \"axis_point\": " << vec(b.axis_point) << ", \"axis_direction\": "
-      << vec(b.axis_direction) << ", \"radius_mm\": " << b.radius_mm
+      << ", \"axis_point\": " << vec(b.axis_point)
+      << ", \"axis_direction\": " << vec(b.axis_direction) << ", \"radius_mm\": " << b.radius_mm
       << ", \"nominal_angle_deg\": " << b.nominal_angle_deg << ", \"flange_a\": " << b.flange_a
       << ", \"flange_b\": " << b.flange_b << "}";
   }
@@ -75,7 +76,8 @@ std::string as_json(const analysis::CadLoadReport& r, const std::vector<analysis
   return o.str();
 }
 
-std::string as_text(const analysis::CadLoadReport& r, const std::vector<analysis::CadFaceInfo>& faces,
+std::string as_text(const analysis::CadLoadReport& r,
+                    const std::vector<analysis::CadFaceInfo>& faces,
                     const analysis::PartSegmentation& s) {
   std::ostringstream o;
   o.precision(6);
@@ -114,8 +116,10 @@ int model_main(int argc, char** argv) {
   if (args.has("linear-deflection")) {
     const auto mm = args.get_number("linear-deflection");
     if (!mm || !(*mm > 0.0))
-      return fail_with(kName, "--linear-deflection " + args.get("linear-deflection") +
-                                  ": expected a positive number of mm", kExitUsage);
+      return fail_with(kName,
+                       "--linear-deflection " + args.get("linear-deflection") +
+                           ": expected a positive number of mm",
+                       kExitUsage);
     settings.linear_deflection_mm = *mm;
   }
   const auto shape = analysis::load_cad(args.positionals()[0], settings);

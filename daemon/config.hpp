@@ -20,13 +20,13 @@ namespace springscan::daemon {
 struct PartEntry {
   std::uint16_t part_id = 0;
   std::string name;
-  std::string cad_file;             ///< absolute (relative paths resolve against the config)
-  v1::AnalysisSettings settings;    ///< overrides only; the pipeline fills in its defaults
+  std::string cad_file;           ///< absolute (relative paths resolve against the config)
+  v1::AnalysisSettings settings;  ///< overrides only; the pipeline fills in its defaults
 };
 
 struct DaemonSettings {
   StationSettings station;
-  v1::ScannerConfig scanner;             ///< passed on to the driver as read
+  v1::ScannerConfig scanner;  ///< passed on to the driver as read
   std::vector<PartEntry> parts;
   std::string model_cache_dir = "/var/cache/springscan";
   LogLevel log_level = LogLevel::kInfo;

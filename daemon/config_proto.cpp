@@ -1,15 +1,14 @@
 // Conversion of the DaemonConfig text proto into DaemonSettings (STYLE.md section 1: only
 // *_proto.cpp files convert between proto messages and our structs).
 #include <arpa/inet.h>
+#include <google/protobuf/io/tokenizer.h>
+#include <google/protobuf/text_format.h>
 
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
 #include <utility>
-
-#include <google/protobuf/io/tokenizer.h>
-#include <google/protobuf/text_format.h>
 
 #include "daemon/config.hpp"
 
@@ -136,8 +135,8 @@ std::string apply_modbus(const v1::ModbusConfig& m, const Locator& at, DaemonSet
     s.unit_id = static_cast<std::uint8_t>(m.unit_id());
   }
   if (m.has_word_order()) {
-    out.station.word_order = m.word_order() == v1::ModbusConfig::CDAB ? regs::WordOrder::kCdab
-                                                                      : regs::WordOrder::kAbcd;
+    out.station.word_order =
+        m.word_order() == v1::ModbusConfig::CDAB ? regs::WordOrder::kCdab : regs::WordOrder::kAbcd;
   }
   if (m.has_max_connections()) {
     // libmodbus select()s on each client: keep the count small (notes section 2).
@@ -192,8 +191,8 @@ std::string apply_parts(const v1::DaemonConfig& c, const Locator& at, const std:
              "' is not a readable file" + (cad != p.cad_file() ? " (resolved to " + cad + ")" : "");
     }
     out.station.machine.known_parts.insert(static_cast<std::uint16_t>(p.part_id()));
-    out.parts.push_back(PartEntry{static_cast<std::uint16_t>(p.part_id()), p.name(), cad,
-                                  p.settings()});
+    out.parts.push_back(
+        PartEntry{static_cast<std::uint16_t>(p.part_id()), p.name(), cad, p.settings()});
   }
   return "";
 }
@@ -251,7 +250,8 @@ Expected<DaemonSettings> parse_daemon_config(const std::string& text,
   parser.RecordErrorsTo(&errors);
   parser.WriteLocationsTo(&tree);
   if (!parser.ParseFromString(text, &config)) {
-    return fail(file_name + ":" + (errors.message().empty() ? "1:1: parse error" : errors.message()));
+    return fail(file_name + ":" +
+                (errors.message().empty() ? "1:1: parse error" : errors.message()));
   }
   const Locator at(file_name, tree);
   DaemonSettings settings;

@@ -39,8 +39,7 @@ std::string lower(std::string text) {
 regs::ErrorDetail classify_scan_error(const std::string& message) {
   const std::string m = lower(message);
   const auto has = [&m](const char* word) { return m.find(word) != std::string::npos; };
-  if (has("unplug") || has("no device") || has("disconnect") || has("gone") ||
-      has("not found")) {
+  if (has("unplug") || has("no device") || has("disconnect") || has("gone") || has("not found")) {
     return regs::ErrorDetail::kDeviceGone;
   }
   if (has("timeout") || has("timed out")) return regs::ErrorDetail::kTimeout;
@@ -127,13 +126,14 @@ void JobRunner::probe_scanner() {
     const auto info = scanner_.identify();
     now_online = info.ok() && scanner_.online();
     if (now_online) {
-      log_.info("scanner online: " + info->kind + " " + info->model + " serial " +
-                info->serial + " firmware " + info->firmware);
+      log_.info("scanner online: " + info->kind + " " + info->model + " serial " + info->serial +
+                " firmware " + info->firmware);
     }
   }
   if (was_online && !now_online) {
-    log_.warning("scanner went offline: SCANNER_ONLINE is 0 and triggers are refused. Check "
-                 "the scanner's USB cable and power; it is reopened automatically.");
+    log_.warning(
+        "scanner went offline: SCANNER_ONLINE is 0 and triggers are refused. Check "
+        "the scanner's USB cable and power; it is reopened automatically.");
   }
   online_ = now_online;
 }

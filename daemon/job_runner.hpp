@@ -50,8 +50,8 @@ struct RunnerEvent {
   enum class Kind { kAcquired, kFinished };
   Kind kind = Kind::kFinished;
   std::uint64_t record = 0;
-  JobEnd end;          ///< kFinished only
-  ResultBlock block;   ///< kFinished and end.persisted only
+  JobEnd end;               ///< kFinished only
+  ResultBlock block;        ///< kFinished and end.persisted only
   std::string report_path;  ///< kFinished and end.persisted only
 };
 

@@ -3,7 +3,6 @@
 //   springscand --config FILE [--check]
 #include <signal.h>
 #include <systemd/sd-daemon.h>
-
 #include <unistd.h>
 
 #include <atomic>
@@ -73,11 +72,9 @@ int main(int argc, char** argv) {
   }
   install_signal_handlers();
   auto scanner = make_scanner(settings->scanner, log);
-  auto station = Station::create(settings->station, *scanner,
-                                 make_analysis(settings->parts, settings->model_cache_dir, log),
-                                 log, [](const std::string& message) {
-                                   sd_notify(0, message.c_str());
-                                 });
+  auto station = Station::create(
+      settings->station, *scanner, make_analysis(settings->parts, settings->model_cache_dir, log),
+      log, [](const std::string& message) { sd_notify(0, message.c_str()); });
   if (!station) {
     log.error("cannot start: " + station.message());
     sd_notify(0, ("STATUS=cannot start: " + station.message()).c_str());
@@ -86,8 +83,8 @@ int main(int argc, char** argv) {
   (*station)->run(g_stop);
   std::thread([&log] {
     std::this_thread::sleep_for(kStopBound);
-    log.warning("shutdown: the analysis still runs after " +
-                std::to_string(kStopBound.count()) + " s; exiting without its result");
+    log.warning("shutdown: the analysis still runs after " + std::to_string(kStopBound.count()) +
+                " s; exiting without its result");
     _exit(0);
   }).detach();
   station->reset();  // cancels a running scan, waits for the runner

@@ -15,8 +15,8 @@ namespace springscan::daemon {
 
 namespace {
 
-constexpr int kMaxFramesPerWakeup = 16;   // fairness: then the next client gets its turn
-constexpr int kPartialRecheckMs = 5;      // a client with a partial frame is re-peeked this often
+constexpr int kMaxFramesPerWakeup = 16;  // fairness: then the next client gets its turn
+constexpr int kPartialRecheckMs = 5;     // a client with a partial frame is re-peeked this often
 constexpr unsigned kTcpUserTimeoutMs = 10000;
 
 std::string errno_text(int error) { return std::strerror(error); }
@@ -215,8 +215,8 @@ bool ModbusServer::serve_frame(Client& client, std::size_t frame_bytes, const Wr
       check_request(req, frame_bytes, RequestCheckSettings{settings_.unit_id});
   if (verdict.exception != 0) {
     ++stats_.exceptions;
-    log_.debug("Modbus client " + client.peer + ": exception " +
-               std::to_string(verdict.exception) + ": " + verdict.problem);
+    log_.debug("Modbus client " + client.peer + ": exception " + std::to_string(verdict.exception) +
+               ": " + verdict.problem);
     if (recv(client.fd, req, frame_bytes, MSG_DONTWAIT) != static_cast<ssize_t>(frame_bytes)) {
       return false;
     }

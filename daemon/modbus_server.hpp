@@ -9,6 +9,7 @@
 // Thread safety: none; one thread (the event loop) calls everything, and that thread also owns
 // the register image, so every reply sees one consistent state.
 
+#include <modbus/modbus.h>
 #include <poll.h>
 
 #include <chrono>
@@ -17,8 +18,6 @@
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <modbus/modbus.h>
 
 #include "analysis/core/expected.hpp"
 #include "daemon/log.hpp"

@@ -44,10 +44,9 @@ PlcControl RegisterImage::plc_control() const {
 void RegisterImage::publish_status(const MachineStatus& s, const LiveValues& live) {
   auto* m = mapping_.get();
   const bool heartbeat_bit = ((live.heartbeat / 10) & 1u) != 0;  // toggles every second
-  const bool di[regs::kDiCount] = {s.ready,  s.trigger_ack,      s.busy,
-                                   s.result_valid, s.part_ok,   s.error(),
-                                   s.trigger_rejected, s.scanner_online, heartbeat_bit,
-                                   s.plc_comm_lost};
+  const bool di[regs::kDiCount] = {
+      s.ready,   s.trigger_ack,      s.busy,           s.result_valid, s.part_ok,
+      s.error(), s.trigger_rejected, s.scanner_online, heartbeat_bit,  s.plc_comm_lost};
   std::uint16_t status_word = 0;
   for (int i = 0; i < regs::kDiCount; ++i) {
     m->tab_input_bits[i] = di[i] ? 1 : 0;
@@ -92,9 +91,8 @@ void RegisterImage::publish_result(const ResultBlock& block) {
     const BendRow& b = block.bends[j];
     const auto base = static_cast<std::uint16_t>(regs::kIrBendTable + j * regs::kBendRecordSize);
     ir[base + regs::kBendId] = b.id;
-    ir[base + regs::kBendFlags] =
-        static_cast<std::uint16_t>((b.measured ? regs::kBendMeasured : 0) |
-                                   (b.pass ? regs::kBendPass : 0));
+    ir[base + regs::kBendFlags] = static_cast<std::uint16_t>(
+        (b.measured ? regs::kBendMeasured : 0) | (b.pass ? regs::kBendPass : 0));
     put_int32(static_cast<std::uint16_t>(base + regs::kBendSpringback),
               regs::deg_to_mdeg(b.springback_deg));
     put_int32(static_cast<std::uint16_t>(base + regs::kBendMeasuredAngle),
@@ -120,8 +118,7 @@ void RegisterImage::publish_result(const ResultBlock& block) {
     put_int32(static_cast<std::uint16_t>(base + regs::kVectorDz), dz);
   }
   ir[regs::kIrResultSeq] = block.seq;
-  mirror_inputs(regs::kIrResultSeq, regs::kResultBlockEnd - regs::kIrResultSeq,
-                regs::kIrResultSeq);
+  mirror_inputs(regs::kIrResultSeq, regs::kResultBlockEnd - regs::kIrResultSeq, regs::kIrResultSeq);
   mirror_inputs(regs::kIrVectors, regs::kInputRegisterCount - regs::kIrVectors, regs::kIrVectors);
   refresh_window();
 }

@@ -4,10 +4,10 @@
 // Owned by the event loop thread, which is also the only thread serving Modbus requests, so a
 // read never sees half of an update (register map "Handshake" step 4).
 
+#include <modbus/modbus.h>
+
 #include <cstdint>
 #include <memory>
-
-#include <modbus/modbus.h>
 
 #include "daemon/register_map.hpp"
 #include "daemon/result_block.hpp"

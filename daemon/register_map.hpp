@@ -32,12 +32,12 @@ inline constexpr std::uint16_t kCoilCount = 4;
 
 // ------------------------------------------------------------------------------------------
 // Discrete inputs (FC02 read): station -> PLC.
-inline constexpr std::uint16_t kDiReady = 0;            ///< a trigger now would be accepted
-inline constexpr std::uint16_t kDiTriggerAck = 1;       ///< trigger accepted; drops after TRIGGER
-inline constexpr std::uint16_t kDiBusy = 2;             ///< an inspection is running
-inline constexpr std::uint16_t kDiResultValid = 3;      ///< the frozen result block is new
-inline constexpr std::uint16_t kDiPartOk = 4;           ///< the result's verdict (valid only with 3)
-inline constexpr std::uint16_t kDiError = 5;            ///< ERROR_CODE != 0; clear with ERROR_RESET
+inline constexpr std::uint16_t kDiReady = 0;        ///< a trigger now would be accepted
+inline constexpr std::uint16_t kDiTriggerAck = 1;   ///< trigger accepted; drops after TRIGGER
+inline constexpr std::uint16_t kDiBusy = 2;         ///< an inspection is running
+inline constexpr std::uint16_t kDiResultValid = 3;  ///< the frozen result block is new
+inline constexpr std::uint16_t kDiPartOk = 4;       ///< the result's verdict (valid only with 3)
+inline constexpr std::uint16_t kDiError = 5;        ///< ERROR_CODE != 0; clear with ERROR_RESET
 inline constexpr std::uint16_t kDiTriggerRejected = 6;  ///< last trigger edge refused (REJECT_CODE)
 inline constexpr std::uint16_t kDiScannerOnline = 7;    ///< the scanner is present and open
 inline constexpr std::uint16_t kDiHeartbeat = 8;        ///< toggles every second
@@ -47,11 +47,11 @@ inline constexpr std::uint16_t kDiCount = 10;
 // ------------------------------------------------------------------------------------------
 // Holding registers (FC03 read, FC06/FC16 write). 0..4 are written by the PLC; the mirrors
 // below are read-only (a write answers exception 02 ILLEGAL DATA ADDRESS).
-inline constexpr std::uint16_t kHrControlWord = 0;  ///< bit i = coil i (OR-ed with the coils)
-inline constexpr std::uint16_t kHrJobId = 1;        ///< latched at the trigger edge
-inline constexpr std::uint16_t kHrPartId = 2;       ///< latched at the trigger edge
-inline constexpr std::uint16_t kHrPlcHeartbeat = 3; ///< the PLC changes it at least every 1 s
-inline constexpr std::uint16_t kHrPageSelect = 4;   ///< page shown in the window at 800
+inline constexpr std::uint16_t kHrControlWord = 0;   ///< bit i = coil i (OR-ed with the coils)
+inline constexpr std::uint16_t kHrJobId = 1;         ///< latched at the trigger edge
+inline constexpr std::uint16_t kHrPartId = 2;        ///< latched at the trigger edge
+inline constexpr std::uint16_t kHrPlcHeartbeat = 3;  ///< the PLC changes it at least every 1 s
+inline constexpr std::uint16_t kHrPageSelect = 4;    ///< page shown in the window at 800
 inline constexpr std::uint16_t kHrWritableCount = 5;
 /// Holding 10..(10+kLiveCount) mirror input registers 0..kLiveCount (read-only).
 inline constexpr std::uint16_t kHrLiveMirror = 10;
@@ -61,38 +61,38 @@ inline constexpr std::uint16_t kHrResultMirror = 100;
 // ------------------------------------------------------------------------------------------
 // Input registers (FC04 read): live block, refreshed every loop iteration.
 inline constexpr std::uint16_t kIrMapVersion = 0;
-inline constexpr std::uint16_t kIrBootId = 1;        ///< random at every start, never 0
-inline constexpr std::uint16_t kIrState = 2;         ///< State below (PackML-like)
-inline constexpr std::uint16_t kIrHeartbeat = 3;     ///< +1 every 100 ms, wraps
-inline constexpr std::uint16_t kIrErrorCode = 4;     ///< ErrorCode below
-inline constexpr std::uint16_t kIrErrorDetail = 5;   ///< ErrorDetail below
-inline constexpr std::uint16_t kIrTriggerCount = 6;  ///< accepted triggers since start, wraps
-inline constexpr std::uint16_t kIrEndianProbe = 7;   ///< 7..8: int32 0x01020304 in WORD_ORDER
-inline constexpr std::uint16_t kIrStatusWord = 9;    ///< bit i = discrete input i
-inline constexpr std::uint16_t kIrRejectCode = 10;   ///< RejectCode of the last refused trigger
-inline constexpr std::uint16_t kIrRejectCount = 11;  ///< refused triggers since start, wraps
-inline constexpr std::uint16_t kIrScanProgress = 12; ///< 0..100 % of the running scan
+inline constexpr std::uint16_t kIrBootId = 1;         ///< random at every start, never 0
+inline constexpr std::uint16_t kIrState = 2;          ///< State below (PackML-like)
+inline constexpr std::uint16_t kIrHeartbeat = 3;      ///< +1 every 100 ms, wraps
+inline constexpr std::uint16_t kIrErrorCode = 4;      ///< ErrorCode below
+inline constexpr std::uint16_t kIrErrorDetail = 5;    ///< ErrorDetail below
+inline constexpr std::uint16_t kIrTriggerCount = 6;   ///< accepted triggers since start, wraps
+inline constexpr std::uint16_t kIrEndianProbe = 7;    ///< 7..8: int32 0x01020304 in WORD_ORDER
+inline constexpr std::uint16_t kIrStatusWord = 9;     ///< bit i = discrete input i
+inline constexpr std::uint16_t kIrRejectCode = 10;    ///< RejectCode of the last refused trigger
+inline constexpr std::uint16_t kIrRejectCount = 11;   ///< refused triggers since start, wraps
+inline constexpr std::uint16_t kIrScanProgress = 12;  ///< 0..100 % of the running scan
 inline constexpr std::uint16_t kLiveCount = 13;
 inline constexpr std::int32_t kEndianProbeValue = 0x01020304;
 
 // Input registers: the frozen result block. Written only when an inspection ends, before
 // RESULT_VALID rises; unchanged until the next result (a PLC may read it in several requests).
-inline constexpr std::uint16_t kIrResultSeq = 100;       ///< 1..65535, never 0 once a result exists
-inline constexpr std::uint16_t kIrResultPartId = 101;    ///< PART_ID echo
-inline constexpr std::uint16_t kIrResultJobId = 102;     ///< JOB_ID echo
-inline constexpr std::uint16_t kIrResultCode = 103;      ///< ResultCode below
-inline constexpr std::uint16_t kIrMaxDeviation = 104;    ///< 104..105 int32 um, max |deviation|
-inline constexpr std::uint16_t kIrRmsDeviation = 106;    ///< 106..107 int32 um
-inline constexpr std::uint16_t kIrVectorCount = 108;     ///< N compensation vectors (<= 1024)
+inline constexpr std::uint16_t kIrResultSeq = 100;     ///< 1..65535, never 0 once a result exists
+inline constexpr std::uint16_t kIrResultPartId = 101;  ///< PART_ID echo
+inline constexpr std::uint16_t kIrResultJobId = 102;   ///< JOB_ID echo
+inline constexpr std::uint16_t kIrResultCode = 103;    ///< ResultCode below
+inline constexpr std::uint16_t kIrMaxDeviation = 104;  ///< 104..105 int32 um, max |deviation|
+inline constexpr std::uint16_t kIrRmsDeviation = 106;  ///< 106..107 int32 um
+inline constexpr std::uint16_t kIrVectorCount = 108;   ///< N compensation vectors (<= 1024)
 inline constexpr std::uint16_t kIrVectorRecordSize = 109;
-inline constexpr std::uint16_t kIrCycleTimeMs = 110;     ///< 110..111 int32 ms, trigger -> result
-inline constexpr std::uint16_t kIrBendCount = 112;       ///< bends in the table (<= 16)
+inline constexpr std::uint16_t kIrCycleTimeMs = 110;  ///< 110..111 int32 ms, trigger -> result
+inline constexpr std::uint16_t kIrBendCount = 112;    ///< bends in the table (<= 16)
 inline constexpr std::uint16_t kIrBendRecordSize = 113;
-inline constexpr std::uint16_t kIrBendsFailed = 114;     ///< bends out of angle tolerance
-inline constexpr std::uint16_t kIrP95Deviation = 115;    ///< 115..116 int32 um, 95th pct |dev|
-inline constexpr std::uint16_t kIrScanPoints = 117;      ///< 117..118 int32 points scanned
+inline constexpr std::uint16_t kIrBendsFailed = 114;   ///< bends out of angle tolerance
+inline constexpr std::uint16_t kIrP95Deviation = 115;  ///< 115..116 int32 um, 95th pct |dev|
+inline constexpr std::uint16_t kIrScanPoints = 117;    ///< 117..118 int32 points scanned
 inline constexpr std::uint16_t kIrResultReserved = 119;
-inline constexpr std::uint16_t kIrBendTable = 120;       ///< kMaxBends records of 6 registers
+inline constexpr std::uint16_t kIrBendTable = 120;  ///< kMaxBends records of 6 registers
 inline constexpr std::uint16_t kBendRecordSize = 6;
 inline constexpr std::uint16_t kMaxBends = 16;
 // A bend record: +0 bend id, +1 flags (BendFlag), +2..3 springback in millidegrees (int32,
@@ -155,35 +155,35 @@ enum class ResultCode : std::uint16_t {
 /// ERROR_CODE register: why ERROR is set. Latched until ERROR_RESET.
 enum class ErrorCode : std::uint16_t {
   kNone = 0,
-  kScanFailed = 2,           ///< a scan failed (ERROR_DETAIL: ErrorDetail)
-  kAnalysisFailed = 3,       ///< the analysis failed
-  kPartModelFailed = 4,      ///< the part's CAD model could not be loaded
-  kReportWriteFailed = 5,    ///< the report could not be persisted: the result is NOT valid
-  kTriggerNotReleased = 6,   ///< TRIGGER stayed high past the release timeout
-  kPlcCommLost = 7,          ///< PLC_HEARTBEAT stopped changing
-  kInternal = 9,             ///< a bug: see the log
+  kScanFailed = 2,          ///< a scan failed (ERROR_DETAIL: ErrorDetail)
+  kAnalysisFailed = 3,      ///< the analysis failed
+  kPartModelFailed = 4,     ///< the part's CAD model could not be loaded
+  kReportWriteFailed = 5,   ///< the report could not be persisted: the result is NOT valid
+  kTriggerNotReleased = 6,  ///< TRIGGER stayed high past the release timeout
+  kPlcCommLost = 7,         ///< PLC_HEARTBEAT stopped changing
+  kInternal = 9,            ///< a bug: see the log
 };
 
 /// ERROR_DETAIL register: the cause within ERROR_CODE, where one is known.
 enum class ErrorDetail : std::uint16_t {
   kNone = 0,
-  kDeviceGone = 1,     ///< unplugged during the scan
-  kTimeout = 2,        ///< the device stopped answering
-  kCorruptData = 3,    ///< frames failed their checks
-  kCancelled = 4,      ///< the scan was cancelled (shutdown)
+  kDeviceGone = 1,   ///< unplugged during the scan
+  kTimeout = 2,      ///< the device stopped answering
+  kCorruptData = 3,  ///< frames failed their checks
+  kCancelled = 4,    ///< the scan was cancelled (shutdown)
   kOther = 9,
 };
 
 /// REJECT_CODE register: why the last trigger edge was refused (no Modbus exception is sent).
 enum class RejectCode : std::uint16_t {
   kNone = 0,
-  kBusy = 1,              ///< an inspection is running
-  kNotEnabled = 2,        ///< TRIGGER_ENABLE is 0
-  kErrorActive = 3,       ///< ERROR is set: ERROR_RESET first
-  kResultNotAcked = 4,    ///< RESULT_VALID is still 1: RESULT_ACK first
-  kScannerOffline = 5,    ///< SCANNER_ONLINE is 0
-  kUnknownPart = 6,       ///< PART_ID is not in the part catalogue
-  kCommLost = 7,          ///< PLC_COMM_LOST is set: ERROR_RESET first
+  kBusy = 1,            ///< an inspection is running
+  kNotEnabled = 2,      ///< TRIGGER_ENABLE is 0
+  kErrorActive = 3,     ///< ERROR is set: ERROR_RESET first
+  kResultNotAcked = 4,  ///< RESULT_VALID is still 1: RESULT_ACK first
+  kScannerOffline = 5,  ///< SCANNER_ONLINE is 0
+  kUnknownPart = 6,     ///< PART_ID is not in the part catalogue
+  kCommLost = 7,        ///< PLC_COMM_LOST is set: ERROR_RESET first
 };
 
 /// Bend record flags.

@@ -106,8 +106,7 @@ Expected<std::optional<v1::InspectionReport>> ReportStore::load_latest() const {
   return std::optional<v1::InspectionReport>(std::move(report));
 }
 
-Expected<std::string> ReportStore::persist(std::uint64_t record,
-                                           const v1::InspectionReport& report,
+Expected<std::string> ReportStore::persist(std::uint64_t record, const v1::InspectionReport& report,
                                            const analysis::PointCloud* deviation_cloud) {
   const std::string final_path = record_path(record);
   const std::string temp =
@@ -122,9 +121,10 @@ Expected<std::string> ReportStore::persist(std::uint64_t record,
   std::vector<std::pair<std::string, std::string>> files = {
       {"report.pb", report.SerializeAsString()}, {"report.json", std::move(*json)}};
   if (deviation_cloud != nullptr && !deviation_cloud->empty()) {
-    auto ply = report::format_deviation_ply(*deviation_cloud,
-                                              report::deviation_color_scale_mm(report));
-    if (!ply) return fail("deviation.ply for record " + std::to_string(record) + ": " + ply.message());
+    auto ply =
+        report::format_deviation_ply(*deviation_cloud, report::deviation_color_scale_mm(report));
+    if (!ply)
+      return fail("deviation.ply for record " + std::to_string(record) + ": " + ply.message());
     files.emplace_back("deviation.ply", std::move(*ply));
   }
   // The page a quality engineer opens (issue 9); an empty cloud still renders, without pictures.

@@ -40,8 +40,7 @@ class ReportStore {
   analysis::Expected<std::optional<v1::InspectionReport>> load_latest() const;
   /// Writes record `record` (must be above last_record()): report.pb, report.json and, when
   /// `deviation_cloud` has points, deviation.ply. Returns the record's directory.
-  analysis::Expected<std::string> persist(std::uint64_t record,
-                                          const v1::InspectionReport& report,
+  analysis::Expected<std::string> persist(std::uint64_t record, const v1::InspectionReport& report,
                                           const analysis::PointCloud* deviation_cloud);
   /// The directory of record `record`.
   std::string record_path(std::uint64_t record) const;

@@ -159,9 +159,9 @@ RequestVerdict check_request(const std::uint8_t* adu, std::size_t size,
   }
   const std::uint8_t unit = adu[kMbapHeaderBytes - 1];
   if (unit != settings.unit_id && unit != 0xFF) {
-    return refuse(MODBUS_EXCEPTION_GATEWAY_TARGET,
-                  "unit id " + std::to_string(unit) + " (this station is unit " +
-                      std::to_string(settings.unit_id) + ")");
+    return refuse(MODBUS_EXCEPTION_GATEWAY_TARGET, "unit id " + std::to_string(unit) +
+                                                       " (this station is unit " +
+                                                       std::to_string(settings.unit_id) + ")");
   }
   return check_pdu(adu + kMbapHeaderBytes, size - kMbapHeaderBytes);
 }

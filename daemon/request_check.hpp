@@ -14,16 +14,16 @@
 
 namespace springscan::daemon {
 
-inline constexpr std::size_t kMbapHeaderBytes = 7;  ///< incl. the unit id
+inline constexpr std::size_t kMbapHeaderBytes = 7;   ///< incl. the unit id
 inline constexpr std::size_t kMbapLengthPrefix = 6;  ///< bytes before the counted part
 inline constexpr std::size_t kMaxMbapLength = 254;   ///< unit id + 253-byte PDU
 inline constexpr std::size_t kMaxAduBytes = kMbapLengthPrefix + kMaxMbapLength;
 
 /// The outcome of the framing check on the first 6 bytes.
 struct FrameHeader {
-  bool valid = false;         ///< false: not Modbus TCP; close the connection
+  bool valid = false;           ///< false: not Modbus TCP; close the connection
   std::size_t frame_bytes = 0;  ///< total ADU length to wait for
-  std::string problem;        ///< why it is invalid, for the log
+  std::string problem;          ///< why it is invalid, for the log
 };
 
 /// Reads the MBAP prefix (needs >= 6 bytes): protocol id must be 0, length 2..254.

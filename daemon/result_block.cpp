@@ -32,8 +32,8 @@ ResultBlock result_block_from_report(const v1::InspectionReport& report) {
   block.code = code <= static_cast<std::uint32_t>(regs::ResultCode::kAnalysisFailed)
                    ? static_cast<regs::ResultCode>(code)
                    : regs::ResultCode::kAnalysisFailed;
-  block.cycle_time_ms = static_cast<std::int64_t>(std::llround(
-      std::isfinite(report.cycle_time_ms()) ? report.cycle_time_ms() : 0.0));
+  block.cycle_time_ms = static_cast<std::int64_t>(
+      std::llround(std::isfinite(report.cycle_time_ms()) ? report.cycle_time_ms() : 0.0));
   block.scan_points = report.input().scan_points();
   const bool analysed =
       block.code == regs::ResultCode::kOk || block.code == regs::ResultCode::kFormNok;
@@ -56,8 +56,8 @@ ResultBlock result_block_from_report(const v1::InspectionReport& report) {
     row.measured_angle_deg = finite_or_nan(bend.measured_angle_deg());
     block.bends.push_back(row);
   }
-  block.vectors.reserve(static_cast<std::size_t>(
-      std::min<int>(report.compensation_size(), regs::kMaxVectors)));
+  block.vectors.reserve(
+      static_cast<std::size_t>(std::min<int>(report.compensation_size(), regs::kMaxVectors)));
   for (const auto& c : report.compensation()) {
     if (block.vectors.size() >= regs::kMaxVectors) break;
     block.vectors.push_back({c.vector().x(), c.vector().y(), c.vector().z()});

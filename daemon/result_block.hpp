@@ -15,7 +15,7 @@ struct BendRow {
   std::uint16_t id = 0;
   bool measured = false;
   bool pass = false;
-  double springback_deg = 0.0;      ///< nominal minus measured
+  double springback_deg = 0.0;  ///< nominal minus measured
   double measured_angle_deg = 0.0;
 };
 

@@ -17,28 +17,39 @@ constexpr int kWatchdogEveryTicks = 10;                 // WATCHDOG=1 once a sec
 
 const char* reject_text(regs::RejectCode code) {
   switch (code) {
-    case regs::RejectCode::kBusy: return "busy with the previous part: wait for BUSY = 0";
-    case regs::RejectCode::kNotEnabled: return "TRIGGER_ENABLE (coil 0) is off";
-    case regs::RejectCode::kErrorActive: return "an error is active: set ERROR_RESET (coil 3)";
+    case regs::RejectCode::kBusy:
+      return "busy with the previous part: wait for BUSY = 0";
+    case regs::RejectCode::kNotEnabled:
+      return "TRIGGER_ENABLE (coil 0) is off";
+    case regs::RejectCode::kErrorActive:
+      return "an error is active: set ERROR_RESET (coil 3)";
     case regs::RejectCode::kResultNotAcked:
       return "the previous result was not acknowledged: set RESULT_ACK (coil 2)";
-    case regs::RejectCode::kScannerOffline: return "the scanner is offline: check its USB cable";
+    case regs::RejectCode::kScannerOffline:
+      return "the scanner is offline: check its USB cable";
     case regs::RejectCode::kUnknownPart:
       return "PART_ID is not in the part catalogue of the config";
     case regs::RejectCode::kCommLost:
       return "PLC heartbeat was lost: keep PLC_HEARTBEAT changing, then set ERROR_RESET";
-    default: return "no reason";
+    default:
+      return "no reason";
   }
 }
 
 const char* state_name(regs::State state) {
   switch (state) {
-    case regs::State::kStopped: return "STOPPED";
-    case regs::State::kIdle: return "IDLE";
-    case regs::State::kAcquiring: return "ACQUIRING";
-    case regs::State::kAnalyzing: return "ANALYZING";
-    case regs::State::kDone: return "DONE";
-    case regs::State::kFault: return "FAULT";
+    case regs::State::kStopped:
+      return "STOPPED";
+    case regs::State::kIdle:
+      return "IDLE";
+    case regs::State::kAcquiring:
+      return "ACQUIRING";
+    case regs::State::kAnalyzing:
+      return "ANALYZING";
+    case regs::State::kDone:
+      return "DONE";
+    case regs::State::kFault:
+      return "FAULT";
   }
   return "?";
 }
@@ -85,13 +96,14 @@ analysis::Expected<std::unique_ptr<Station>> Station::create(const StationSettin
                                                              NotifyFn notify) {
   auto store = ReportStore::open(settings.reports);
   if (!store) return analysis::fail(store.message());
-  std::unique_ptr<Station> station(new Station(settings, std::move(*store), log, std::move(notify)));
+  std::unique_ptr<Station> station(
+      new Station(settings, std::move(*store), log, std::move(notify)));
   station->restore_last_result();
   auto server = ModbusServer::open(settings.modbus, station->image_.mapping(), log);
   if (!server) return analysis::fail(server.message());
   station->server_ = std::move(*server);
-  station->runner_ = std::make_unique<JobRunner>(scanner, std::move(analyze), station->store_,
-                                                 log, settings.runner);
+  station->runner_ = std::make_unique<JobRunner>(scanner, std::move(analyze), station->store_, log,
+                                                 settings.runner);
   station->update_machine(Clock::now());
   return station;
 }
@@ -110,10 +122,10 @@ void Station::restore_last_result() {
   }
   // Shown for reference with RESULT_VALID = 0 under a new BOOT_ID: never mistaken for new.
   image_.publish_result(result_block_from_report(**latest));
-  last_result_text_ = "last result seq " + std::to_string((*latest)->result_seq()) +
-                      " from before the restart";
-  log_.info("restored the result block of record " + std::to_string(last_record_) +
-            " (seq " + std::to_string((*latest)->result_seq()) +
+  last_result_text_ =
+      "last result seq " + std::to_string((*latest)->result_seq()) + " from before the restart";
+  log_.info("restored the result block of record " + std::to_string(last_record_) + " (seq " +
+            std::to_string((*latest)->result_seq()) +
             ") from before the restart; RESULT_VALID stays 0 until the next inspection");
 }
 
@@ -156,8 +168,9 @@ void Station::handle_runner_events(Clock::time_point now) {
       last_result_text_ =
           "last result seq " + std::to_string(event.block.seq) + " part " +
           std::to_string(event.block.part_id) + ": " +
-          (event.end.result_code == regs::ResultCode::kOk ? "PASS" : "FAIL/code " +
-           std::to_string(static_cast<int>(event.end.result_code)));
+          (event.end.result_code == regs::ResultCode::kOk
+               ? "PASS"
+               : "FAIL/code " + std::to_string(static_cast<int>(event.end.result_code)));
     }
     machine_.on_job_finished(event.end, now);
   }
@@ -184,13 +197,12 @@ void Station::log_event(MachineEvent event, const PlcControl& plc) {
       "job " + std::to_string(plc.job_id) + " part " + std::to_string(plc.part_id);
   switch (event) {
     case MachineEvent::kTriggerAccepted:
-      log_.info("trigger accepted: " + ids + " (trigger #" + std::to_string(s.trigger_count) +
-                ")");
+      log_.info("trigger accepted: " + ids + " (trigger #" + std::to_string(s.trigger_count) + ")");
       break;
     case MachineEvent::kTriggerRejected:
       log_.warning("trigger REFUSED for " + ids + " (REJECT_CODE " +
-                   std::to_string(static_cast<int>(s.reject_code)) + "): " +
-                   reject_text(s.reject_code));
+                   std::to_string(static_cast<int>(s.reject_code)) +
+                   "): " + reject_text(s.reject_code));
       break;
     case MachineEvent::kTriggerHeldAtStart:
       log_.warning("TRIGGER is already high at start: ignored until the PLC drops it");
@@ -201,7 +213,9 @@ void Station::log_event(MachineEvent event, const PlcControl& plc) {
                  " s after TRIG_ACK (ERROR_CODE 6). Check the PLC program's handshake, then "
                  "set ERROR_RESET (coil 3).");
       break;
-    case MachineEvent::kResultAcked: log_.debug("result acknowledged by the PLC"); break;
+    case MachineEvent::kResultAcked:
+      log_.debug("result acknowledged by the PLC");
+      break;
     case MachineEvent::kResultExpired:
       log_.warning("the PLC did not acknowledge the result within " +
                    std::to_string(settings_.machine.result_ttl_s) +
@@ -211,13 +225,17 @@ void Station::log_event(MachineEvent event, const PlcControl& plc) {
       log_.info("JOB_ID changed to " + std::to_string(plc.job_id) +
                 " before the result was acknowledged: RESULT_VALID dropped");
       break;
-    case MachineEvent::kErrorReset: log_.info("ERROR_RESET from the PLC: errors cleared"); break;
+    case MachineEvent::kErrorReset:
+      log_.info("ERROR_RESET from the PLC: errors cleared");
+      break;
     case MachineEvent::kCommLost:
       log_.error("PLC heartbeat lost: PLC_HEARTBEAT (holding 3) unchanged for " +
                  std::to_string(settings_.machine.plc_heartbeat_timeout_s) +
                  " s. READY is off. Check the PLC and the network, then set ERROR_RESET.");
       break;
-    case MachineEvent::kCommRestored: log_.info("PLC heartbeat is back"); break;
+    case MachineEvent::kCommRestored:
+      log_.info("PLC heartbeat is back");
+      break;
   }
 }
 

@@ -5,8 +5,8 @@
 #include <mutex>
 
 #include "analysis/cad/model.hpp"
-#include "analysis/messages/cad_model_proto.hpp"
 #include "analysis/inspection/pipeline.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/protocol.hpp"
 #include "drivers/tactile_scanner.hpp"
@@ -104,12 +104,13 @@ std::unique_ptr<drivers::Scanner> make_scanner(const v1::ScannerConfig& config, 
 AnalyzeFn make_analysis(const std::vector<PartEntry>& parts, const std::string& model_cache_dir,
                         Log& log) {
   auto models = std::make_shared<PartModels>(parts, model_cache_dir, log);
-  return [models](std::uint16_t part_id, const analysis::PointCloud& scan)
-             -> analysis::Expected<analysis::InspectionOutcome> {
+  return [models](
+             std::uint16_t part_id,
+             const analysis::PointCloud& scan) -> analysis::Expected<analysis::InspectionOutcome> {
     const PartEntry* part = models->entry(part_id);
     if (part == nullptr) {
-      return analysis::fail(std::string(kPartModelErrorPrefix) + "part " +
-                            std::to_string(part_id) + " is not in the catalogue");
+      return analysis::fail(std::string(kPartModelErrorPrefix) + "part " + std::to_string(part_id) +
+                            " is not in the catalogue");
     }
     auto model = models->get(*part);
     if (!model) return analysis::fail(model.message());

@@ -80,11 +80,16 @@ std::vector<std::uint8_t> encode_frame(protocol::MessageType type, std::uint32_t
 
 std::string to_string(DecodeStatus status) {
   switch (status) {
-    case DecodeStatus::kFrame: return "frame";
-    case DecodeStatus::kNeedMore: return "need more bytes";
-    case DecodeStatus::kBadCrc: return "bad CRC";
-    case DecodeStatus::kOversized: return "oversized length";
-    case DecodeStatus::kBadVersion: return "unknown protocol version";
+    case DecodeStatus::kFrame:
+      return "frame";
+    case DecodeStatus::kNeedMore:
+      return "need more bytes";
+    case DecodeStatus::kBadCrc:
+      return "bad CRC";
+    case DecodeStatus::kOversized:
+      return "oversized length";
+    case DecodeStatus::kBadVersion:
+      return "unknown protocol version";
   }
   return "unknown decode status";
 }

@@ -147,7 +147,7 @@ analysis::Expected<DeviceStatus> DeviceLink::status() {
 }
 
 analysis::Expected<FrameView> DeviceLink::next_scan_frame(const ScanProgress& progress,
-                                                         double done) {
+                                                          double done) {
   using Clock = std::chrono::steady_clock;
   const auto deadline = Clock::now() + std::chrono::milliseconds(settings_.data_timeout_ms);
   const long slice_ms = std::max(1, settings_.cancel_poll_ms);
@@ -239,9 +239,9 @@ analysis::Expected<ScanOutcome> DeviceLink::scan(p::MessageType data_type,
       return outcome;
     } else if (type == p::MessageType::kError) {
       auto e = decode_error(frame->payload);
-      return abort(fail(who() + ": device error " + (e ? std::to_string(e->code) + " (" +
-                                                             e->message + ")"
-                                                       : e.message()) + at));
+      return abort(fail(who() + ": device error " +
+                        (e ? std::to_string(e->code) + " (" + e->message + ")" : e.message()) +
+                        at));
     } else {
       return abort(fail(who() + ": unexpected " + to_string(type) + " frame" + at));
     }

@@ -62,8 +62,7 @@ class DeviceLink {
   /// Runs one scan whose data frames have type `data_type`, passing each to `handler`.
   /// Progress is frames received over frames announced. On any failure the device is told to
   /// stop, the stream is drained, and the error names the device and the frame.
-  analysis::Expected<ScanOutcome> scan(protocol::MessageType data_type,
-                                       const FrameHandler& handler,
+  analysis::Expected<ScanOutcome> scan(protocol::MessageType data_type, const FrameHandler& handler,
                                        const ScanProgress& progress);
 
   /// Transport counters (stalls cleared, opens, ...).

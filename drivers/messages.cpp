@@ -36,8 +36,7 @@ Bytes encode(const Identity& identity) {
   out[0] = static_cast<std::uint8_t>(identity.kind);
   put_text(out.data() + 4, p::kModelBytes, identity.model);
   put_text(out.data() + 4 + p::kModelBytes, p::kSerialBytes, identity.serial);
-  put_text(out.data() + 4 + p::kModelBytes + p::kSerialBytes, p::kFirmwareBytes,
-           identity.firmware);
+  put_text(out.data() + 4 + p::kModelBytes + p::kSerialBytes, p::kFirmwareBytes, identity.firmware);
   return out;
 }
 
@@ -46,13 +45,12 @@ analysis::Expected<Identity> decode_identity(ByteSpan payload) {
     return size_error("identity", p::kIdentityPayloadBytes, payload.size());
   Identity id;
   const std::uint8_t kind = payload[0];
-  if (kind != 1 && kind != 2) return fail("identity payload: unknown scanner kind " +
-                                          std::to_string(kind));
+  if (kind != 1 && kind != 2)
+    return fail("identity payload: unknown scanner kind " + std::to_string(kind));
   id.kind = static_cast<p::ScannerKind>(kind);
   id.model = get_text(payload.data() + 4, p::kModelBytes);
   id.serial = get_text(payload.data() + 4 + p::kModelBytes, p::kSerialBytes);
-  id.firmware = get_text(payload.data() + 4 + p::kModelBytes + p::kSerialBytes,
-                         p::kFirmwareBytes);
+  id.firmware = get_text(payload.data() + 4 + p::kModelBytes + p::kSerialBytes, p::kFirmwareBytes);
   return id;
 }
 
@@ -240,34 +238,56 @@ ProbeRecord probe_record(const ProbeBatchView& batch, std::size_t i) {
 
 std::string to_string(p::MessageType type) {
   switch (type) {
-    case p::MessageType::kIdentify: return "identify";
-    case p::MessageType::kGetConfig: return "get-config";
-    case p::MessageType::kSetConfig: return "set-config";
-    case p::MessageType::kStartScan: return "start-scan";
-    case p::MessageType::kStopScan: return "stop-scan";
-    case p::MessageType::kGetStatus: return "get-status";
-    case p::MessageType::kIdentity: return "identity";
-    case p::MessageType::kConfig: return "config";
-    case p::MessageType::kScanStarted: return "scan-started";
-    case p::MessageType::kScanStopped: return "scan-stopped";
-    case p::MessageType::kStatus: return "status";
-    case p::MessageType::kLaserProfile: return "laser-profile";
-    case p::MessageType::kProbePoints: return "probe-points";
-    case p::MessageType::kEndOfScan: return "end-of-scan";
-    case p::MessageType::kError: return "error";
+    case p::MessageType::kIdentify:
+      return "identify";
+    case p::MessageType::kGetConfig:
+      return "get-config";
+    case p::MessageType::kSetConfig:
+      return "set-config";
+    case p::MessageType::kStartScan:
+      return "start-scan";
+    case p::MessageType::kStopScan:
+      return "stop-scan";
+    case p::MessageType::kGetStatus:
+      return "get-status";
+    case p::MessageType::kIdentity:
+      return "identity";
+    case p::MessageType::kConfig:
+      return "config";
+    case p::MessageType::kScanStarted:
+      return "scan-started";
+    case p::MessageType::kScanStopped:
+      return "scan-stopped";
+    case p::MessageType::kStatus:
+      return "status";
+    case p::MessageType::kLaserProfile:
+      return "laser-profile";
+    case p::MessageType::kProbePoints:
+      return "probe-points";
+    case p::MessageType::kEndOfScan:
+      return "end-of-scan";
+    case p::MessageType::kError:
+      return "error";
   }
   return "type 0x" + std::to_string(static_cast<int>(type));
 }
 
 std::string to_string(p::DeviceErrorCode code) {
   switch (code) {
-    case p::DeviceErrorCode::kUnknownCommand: return "unknown command";
-    case p::DeviceErrorCode::kBadPayload: return "bad payload";
-    case p::DeviceErrorCode::kBusy: return "busy (scan running)";
-    case p::DeviceErrorCode::kNotScanning: return "not scanning";
-    case p::DeviceErrorCode::kSensorFault: return "sensor fault";
-    case p::DeviceErrorCode::kOverrun: return "overrun";
-    case p::DeviceErrorCode::kBadFrame: return "bad command frame";
+    case p::DeviceErrorCode::kUnknownCommand:
+      return "unknown command";
+    case p::DeviceErrorCode::kBadPayload:
+      return "bad payload";
+    case p::DeviceErrorCode::kBusy:
+      return "busy (scan running)";
+    case p::DeviceErrorCode::kNotScanning:
+      return "not scanning";
+    case p::DeviceErrorCode::kSensorFault:
+      return "sensor fault";
+    case p::DeviceErrorCode::kOverrun:
+      return "overrun";
+    case p::DeviceErrorCode::kBadFrame:
+      return "bad command frame";
   }
   return "device error " + std::to_string(static_cast<int>(code));
 }

@@ -27,11 +27,11 @@ struct Identity {
 
 /// §3.2 the device configuration (get and set).
 struct DeviceConfig {
-  float rate_hz = 200.0f;                 ///< profiles (laser) or probe points (tactile) per second
+  float rate_hz = 200.0f;  ///< profiles (laser) or probe points (tactile) per second
   std::uint16_t points_per_profile = 1024;  ///< laser: points across the line, 1..4096
-  std::uint16_t flags = 0;                ///< reserved, 0
-  std::uint32_t exposure_us = 100;        ///< laser exposure time
-  float probe_speed_mm_s = 10.0f;         ///< tactile approach speed
+  std::uint16_t flags = 0;                  ///< reserved, 0
+  std::uint32_t exposure_us = 100;          ///< laser exposure time
+  float probe_speed_mm_s = 10.0f;           ///< tactile approach speed
 };
 
 /// §3.3 the reply to start-scan: what the host should expect.

@@ -9,16 +9,16 @@
 namespace springscan::drivers::protocol {
 
 // §1 USB identity and endpoints.
-inline constexpr std::uint16_t kVendorId = 0x1209;           ///< §1: pid.codes vendor id
-inline constexpr std::uint16_t kProductIdLaser = 0x5301;     ///< §1: laser line scanner
-inline constexpr std::uint16_t kProductIdTactile = 0x5302;   ///< §1: tactile probe
-inline constexpr int kInterfaceNumber = 0;                   ///< §1: the vendor interface
-inline constexpr std::uint8_t kEndpointOut = 0x02;           ///< §1: bulk OUT, commands
-inline constexpr std::uint8_t kEndpointIn = 0x81;            ///< §1: bulk IN, replies and data
-inline constexpr std::uint16_t kMaxPacketSize = 512;         ///< §1: high-speed bulk packets
-inline constexpr std::uint8_t kStringManufacturer = 1;       ///< §1: string descriptor index
-inline constexpr std::uint8_t kStringProduct = 2;            ///< §1: string descriptor index
-inline constexpr std::uint8_t kStringSerial = 3;             ///< §1: string descriptor index
+inline constexpr std::uint16_t kVendorId = 0x1209;          ///< §1: pid.codes vendor id
+inline constexpr std::uint16_t kProductIdLaser = 0x5301;    ///< §1: laser line scanner
+inline constexpr std::uint16_t kProductIdTactile = 0x5302;  ///< §1: tactile probe
+inline constexpr int kInterfaceNumber = 0;                  ///< §1: the vendor interface
+inline constexpr std::uint8_t kEndpointOut = 0x02;          ///< §1: bulk OUT, commands
+inline constexpr std::uint8_t kEndpointIn = 0x81;           ///< §1: bulk IN, replies and data
+inline constexpr std::uint16_t kMaxPacketSize = 512;        ///< §1: high-speed bulk packets
+inline constexpr std::uint8_t kStringManufacturer = 1;      ///< §1: string descriptor index
+inline constexpr std::uint8_t kStringProduct = 2;           ///< §1: string descriptor index
+inline constexpr std::uint8_t kStringSerial = 3;            ///< §1: string descriptor index
 
 // §2 Frame layout: header | payload | CRC-32.
 inline constexpr std::uint8_t kMagic[4] = {'S', 'S', 'C', 'N'};  ///< §2.1: frame start
@@ -74,8 +74,8 @@ enum class DeviceErrorCode : std::uint16_t {
 inline constexpr std::size_t kModelBytes = 32;
 inline constexpr std::size_t kSerialBytes = 32;
 inline constexpr std::size_t kFirmwareBytes = 16;
-inline constexpr std::size_t kIdentityPayloadBytes = 4 + kModelBytes + kSerialBytes +
-                                                     kFirmwareBytes;
+inline constexpr std::size_t kIdentityPayloadBytes =
+    4 + kModelBytes + kSerialBytes + kFirmwareBytes;
 
 // §3.2 configuration payload.
 inline constexpr std::size_t kConfigPayloadBytes = 16;

@@ -53,8 +53,7 @@ analysis::Expected<LaserScannerSettings> laser_settings_from_proto(const v1::Sca
   return s;
 }
 
-analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(
-    const v1::ScannerConfig& c) {
+analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(const v1::ScannerConfig& c) {
   auto link = link_from_proto(c, protocol::kProductIdTactile);
   if (!link) return link.error();
   TactileScannerSettings s;

@@ -34,8 +34,8 @@ analysis::Expected<analysis::PointCloud> TactileProbeScanner::scan(const ScanPro
     auto batch = decode_probe_batch(frame.payload);
     if (!batch) return batch.error();
     if (batch->first_index != next_index)
-      return fail("probe point " + std::to_string(batch->first_index) +
-                  " out of order, expected " + std::to_string(next_index));
+      return fail("probe point " + std::to_string(batch->first_index) + " out of order, expected " +
+                  std::to_string(next_index));
     next_index += batch->count;
     if (cloud.points.size() + batch->count > p::kMaxScanPoints)
       return fail("scan exceeds " + std::to_string(p::kMaxScanPoints) + " points (§6)");

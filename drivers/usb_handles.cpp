@@ -64,18 +64,26 @@ struct OpenDevice::State {
       case LIBUSB_TRANSFER_TIMED_OUT:
         s.received.insert(s.received.end(), slot.buffer.data(),
                           slot.buffer.data() + transfer->actual_length);
-        if (s.stats != nullptr) s.stats->bytes_in += static_cast<std::uint64_t>(transfer->actual_length);
+        if (s.stats != nullptr)
+          s.stats->bytes_in += static_cast<std::uint64_t>(transfer->actual_length);
         if (!s.stopping && s.submit(slot) != LIBUSB_SUCCESS && !s.gone) s.io_error = true;
         break;
-      case LIBUSB_TRANSFER_STALL: s.halted = true; break;
-      case LIBUSB_TRANSFER_NO_DEVICE: s.gone = true; break;
+      case LIBUSB_TRANSFER_STALL:
+        s.halted = true;
+        break;
+      case LIBUSB_TRANSFER_NO_DEVICE:
+        s.gone = true;
+        break;
       case LIBUSB_TRANSFER_OVERFLOW:
         s.overflow = true;
         if (s.stats != nullptr) ++s.stats->overflows;
         if (!s.stopping) s.submit(slot);
         break;
-      case LIBUSB_TRANSFER_CANCELLED: break;
-      default: s.io_error = true; break;
+      case LIBUSB_TRANSFER_CANCELLED:
+        break;
+      default:
+        s.io_error = true;
+        break;
     }
   }
 
@@ -86,8 +94,7 @@ struct OpenDevice::State {
   }
 };
 
-OpenDevice::OpenDevice(HandlePtr handle, int interface_number)
-    : state_(std::make_unique<State>()) {
+OpenDevice::OpenDevice(HandlePtr handle, int interface_number) : state_(std::make_unique<State>()) {
   state_->handle = std::move(handle);
   state_->interface_number = interface_number;
 }
@@ -204,8 +211,7 @@ OpenDevice open_matching(libusb_context* context, const UsbSettings& settings, i
         continue;
       }
     }
-    if (const int rc = libusb_claim_interface(h, settings.interface_number);
-        rc != LIBUSB_SUCCESS) {
+    if (const int rc = libusb_claim_interface(h, settings.interface_number); rc != LIBUSB_SUCCESS) {
       code = rc;
       step = "libusb_claim_interface " + std::to_string(settings.interface_number);
       continue;

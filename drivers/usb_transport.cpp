@@ -21,30 +21,48 @@ std::string hex4(unsigned v) {
 
 std::string to_string(UsbError error) {
   switch (error) {
-    case UsbError::kOk: return "ok";
-    case UsbError::kNotFound: return "device not found";
-    case UsbError::kAccess: return "access denied";
-    case UsbError::kBusy: return "interface busy";
-    case UsbError::kNoDevice: return "device disconnected";
-    case UsbError::kTimeout: return "timeout";
-    case UsbError::kPipe: return "endpoint stalled";
-    case UsbError::kOverflow: return "transfer overflow";
-    case UsbError::kIo: return "I/O error";
+    case UsbError::kOk:
+      return "ok";
+    case UsbError::kNotFound:
+      return "device not found";
+    case UsbError::kAccess:
+      return "access denied";
+    case UsbError::kBusy:
+      return "interface busy";
+    case UsbError::kNoDevice:
+      return "device disconnected";
+    case UsbError::kTimeout:
+      return "timeout";
+    case UsbError::kPipe:
+      return "endpoint stalled";
+    case UsbError::kOverflow:
+      return "transfer overflow";
+    case UsbError::kIo:
+      return "I/O error";
   }
   return "unknown USB error";
 }
 
 UsbError usb_error_from_libusb(int code) {
   switch (code) {
-    case LIBUSB_SUCCESS: return UsbError::kOk;
-    case LIBUSB_ERROR_NOT_FOUND: return UsbError::kNotFound;
-    case LIBUSB_ERROR_ACCESS: return UsbError::kAccess;
-    case LIBUSB_ERROR_BUSY: return UsbError::kBusy;
-    case LIBUSB_ERROR_NO_DEVICE: return UsbError::kNoDevice;
-    case LIBUSB_ERROR_TIMEOUT: return UsbError::kTimeout;
-    case LIBUSB_ERROR_PIPE: return UsbError::kPipe;
-    case LIBUSB_ERROR_OVERFLOW: return UsbError::kOverflow;
-    default: return UsbError::kIo;
+    case LIBUSB_SUCCESS:
+      return UsbError::kOk;
+    case LIBUSB_ERROR_NOT_FOUND:
+      return UsbError::kNotFound;
+    case LIBUSB_ERROR_ACCESS:
+      return UsbError::kAccess;
+    case LIBUSB_ERROR_BUSY:
+      return UsbError::kBusy;
+    case LIBUSB_ERROR_NO_DEVICE:
+      return UsbError::kNoDevice;
+    case LIBUSB_ERROR_TIMEOUT:
+      return UsbError::kTimeout;
+    case LIBUSB_ERROR_PIPE:
+      return UsbError::kPipe;
+    case LIBUSB_ERROR_OVERFLOW:
+      return UsbError::kOverflow;
+    default:
+      return UsbError::kIo;
   }
 }
 
@@ -61,8 +79,7 @@ analysis::Expected<std::unique_ptr<UsbTransport>> UsbTransport::create(
     return analysis::fail("usb settings: transfers_in_flight " +
                           std::to_string(settings.transfers_in_flight) + " outside 1..16");
   if (settings.transfer_bytes < protocol::kMaxPacketSize ||
-      settings.transfer_bytes % protocol::kMaxPacketSize != 0 ||
-      settings.transfer_bytes > 1 << 20)
+      settings.transfer_bytes % protocol::kMaxPacketSize != 0 || settings.transfer_bytes > 1 << 20)
     return analysis::fail("usb settings: transfer_bytes " +
                           std::to_string(settings.transfer_bytes) +
                           " must be a multiple of 512 up to 1 MiB");
@@ -173,10 +190,11 @@ UsbError UsbTransport::read(std::vector<std::uint8_t>& out, int timeout_ms) {
     }
     if (dev.take_overflow()) return fail(UsbError::kOverflow, "bulk IN transfer overflowed");
     if (dev.take_io_error()) return fail(UsbError::kIo, "bulk IN transfer failed");
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline -
-                                                                             Clock::now());
-    if (left.count() <= 0) return fail(UsbError::kTimeout, "bulk IN: no data within " +
-                                                             std::to_string(timeout_ms) + " ms");
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    if (left.count() <= 0)
+      return fail(UsbError::kTimeout,
+                  "bulk IN: no data within " + std::to_string(timeout_ms) + " ms");
     pump(static_cast<int>(std::min<long>(left.count(), 50)));
   }
 }

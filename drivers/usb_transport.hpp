@@ -24,14 +24,14 @@ namespace springscan::drivers {
 /// Transport outcomes, with buckets for libusb's own errors (STYLE.md §5).
 enum class UsbError {
   kOk,
-  kNotFound,   ///< no device with that VID/PID/serial
-  kAccess,     ///< permission denied (udev rule missing)
-  kBusy,       ///< interface claimed by another program
-  kNoDevice,   ///< the device went away
-  kTimeout,    ///< nothing arrived in time
-  kPipe,       ///< an endpoint stalled and could not be cleared
-  kOverflow,   ///< the device sent more than a transfer could hold; data was lost
-  kIo,         ///< any other libusb failure
+  kNotFound,  ///< no device with that VID/PID/serial
+  kAccess,    ///< permission denied (udev rule missing)
+  kBusy,      ///< interface claimed by another program
+  kNoDevice,  ///< the device went away
+  kTimeout,   ///< nothing arrived in time
+  kPipe,      ///< an endpoint stalled and could not be cleared
+  kOverflow,  ///< the device sent more than a transfer could hold; data was lost
+  kIo,        ///< any other libusb failure
 };
 
 std::string to_string(UsbError error);
@@ -39,16 +39,16 @@ std::string to_string(UsbError error);
 UsbError usb_error_from_libusb(int code);
 
 struct UsbSettings {
-  std::uint16_t vendor_id = protocol::kVendorId;          ///< idVendor to match
-  std::uint16_t product_id = protocol::kProductIdLaser;   ///< idProduct to match
-  std::string serial;                                     ///< serial string; empty: any
-  int interface_number = protocol::kInterfaceNumber;      ///< the vendor interface
-  std::uint8_t endpoint_in = protocol::kEndpointIn;       ///< bulk IN endpoint address
-  std::uint8_t endpoint_out = protocol::kEndpointOut;     ///< bulk OUT endpoint address
-  int transfers_in_flight = 4;                            ///< bulk IN transfers kept queued, 1..16
-  int transfer_bytes = 16384;                             ///< each, a multiple of 512
-  int write_timeout_ms = 1000;                            ///< bulk OUT timeout
-  int close_timeout_ms = 1000;                            ///< wait for cancelled transfers
+  std::uint16_t vendor_id = protocol::kVendorId;         ///< idVendor to match
+  std::uint16_t product_id = protocol::kProductIdLaser;  ///< idProduct to match
+  std::string serial;                                    ///< serial string; empty: any
+  int interface_number = protocol::kInterfaceNumber;     ///< the vendor interface
+  std::uint8_t endpoint_in = protocol::kEndpointIn;      ///< bulk IN endpoint address
+  std::uint8_t endpoint_out = protocol::kEndpointOut;    ///< bulk OUT endpoint address
+  int transfers_in_flight = 4;                           ///< bulk IN transfers kept queued, 1..16
+  int transfer_bytes = 16384;                            ///< each, a multiple of 512
+  int write_timeout_ms = 1000;                           ///< bulk OUT timeout
+  int close_timeout_ms = 1000;                           ///< wait for cancelled transfers
 };
 
 /// What the transport had to recover from since it was created.

@@ -76,7 +76,8 @@ Expected<bool> write_inspection_files(const std::string& dir, const InspectionOu
   }
 
   const std::string ply_path = join(dir, "deviation.ply");
-  auto ply = format_deviation_ply(outcome.deviation_cloud, deviation_color_scale_mm(outcome.report));
+  auto ply =
+      format_deviation_ply(outcome.deviation_cloud, deviation_color_scale_mm(outcome.report));
   if (!ply) return fail(ply_path + ": " + ply.message());
   if (auto written = write_file_atomically(ply_path, *ply); !written) return written.error();
 

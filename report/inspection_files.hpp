@@ -11,11 +11,11 @@
 #include <string>
 #include <string_view>
 
-#include "analysis/deviation/deviation.hpp"  // deviation_color, the colour map of deviation.ply
 #include "analysis/core/expected.hpp"
-#include "analysis/io/file_io.hpp"  // write_file_atomically, shared with the daemon's report store
-#include "analysis/inspection/pipeline.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/deviation/deviation.hpp"  // deviation_color, the colour map of deviation.ply
+#include "analysis/inspection/pipeline.hpp"
+#include "analysis/io/file_io.hpp"  // write_file_atomically, shared with the daemon's report store
 #include "proto/springscan.pb.h"
 
 namespace springscan::report {

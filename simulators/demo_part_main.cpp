@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "simulators/parts/cad_profile.hpp"
 #include "analysis/io/point_io.hpp"
+#include "simulators/parts/cad_profile.hpp"
 #include "simulators/parts/sheet_part.hpp"
 
 namespace {

@@ -32,8 +32,8 @@ Expected<std::unique_ptr<PlcClient>> PlcClient::connect(const PlcClientSettings&
   modbus_set_slave(client->ctx_, settings.unit_id);
   modbus_set_response_timeout(client->ctx_, 2, 0);
   if (modbus_connect(client->ctx_) != 0) {
-    return fail(modbus_error(("connect to " + settings.host + ":" +
-                              std::to_string(settings.port)).c_str()));
+    return fail(modbus_error(
+        ("connect to " + settings.host + ":" + std::to_string(settings.port)).c_str()));
   }
   client->last_beat_ = Clock::now();
   return client;
@@ -86,7 +86,9 @@ Expected<ResultRead> PlcClient::read_result() {
     return fail(modbus_error("read result block"));
   }
   ++r.reads;
-  const auto at = [&block](std::uint16_t address) { return block + (address - regs::kIrResultSeq); };
+  const auto at = [&block](std::uint16_t address) {
+    return block + (address - regs::kIrResultSeq);
+  };
   const auto i32 = [&](std::uint16_t address) {
     return regs::decode_int32(at(address), settings_.word_order);
   };
@@ -107,8 +109,8 @@ Expected<ResultRead> PlcClient::read_result() {
   const int vectors = std::min<int>(*at(regs::kIrVectorCount), regs::kMaxVectors);
   std::vector<std::uint16_t> words(static_cast<std::size_t>(vectors) * regs::kVectorRecordSize);
   for (std::size_t done = 0; done < words.size();) {
-    const int count = static_cast<int>(std::min<std::size_t>(regs::kRecommendedChunk,
-                                                             words.size() - done));
+    const int count =
+        static_cast<int>(std::min<std::size_t>(regs::kRecommendedChunk, words.size() - done));
     const auto address = static_cast<int>(regs::kIrVectors + done);
     if (modbus_read_input_registers(ctx_, address, count, words.data() + done) != count) {
       return fail(modbus_error("read vector block"));
@@ -148,8 +150,8 @@ Expected<CycleResult> PlcClient::trigger(std::uint16_t job_id, std::uint16_t par
 }
 
 Expected<CycleResult> PlcClient::wait_result(CycleResult cycle, Clock::time_point triggered) {
-  auto valid = wait_for([](const StationStatus& s) { return s.bit(regs::kDiResultValid); },
-                        "RESULT_VALID");
+  auto valid =
+      wait_for([](const StationStatus& s) { return s.bit(regs::kDiResultValid); }, "RESULT_VALID");
   if (!valid) return fail(valid.message());
   cycle.trigger_to_valid_ms = ms_since(triggered);
   cycle.part_ok = valid->bit(regs::kDiPartOk);

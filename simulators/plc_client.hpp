@@ -3,6 +3,8 @@
 // against springscand. Used by the springscan-plc-sim executable and by the daemon's tests.
 // Not thread-safe: one owner; the connection is owned (RAII) and closed by the destructor.
 
+#include <modbus/modbus.h>
+
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -10,8 +12,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <modbus/modbus.h>
 
 #include "analysis/core/expected.hpp"
 #include "daemon/register_map.hpp"
@@ -54,13 +54,13 @@ struct ResultRead {
 
 /// One handshake cycle as the PLC saw it.
 struct CycleResult {
-  bool accepted = false;                  ///< TRIG_ACK came (else TRIGGER_REJECTED)
+  bool accepted = false;  ///< TRIG_ACK came (else TRIGGER_REJECTED)
   regs::RejectCode reject_code = regs::RejectCode::kNone;
   bool part_ok = false;
-  std::uint16_t error_code = 0;           ///< ERROR_CODE when RESULT_VALID rose
+  std::uint16_t error_code = 0;  ///< ERROR_CODE when RESULT_VALID rose
   ResultRead result;
   double trigger_to_ack_ms = 0.0;
-  double trigger_to_valid_ms = 0.0;       ///< trigger write -> RESULT_VALID seen
+  double trigger_to_valid_ms = 0.0;  ///< trigger write -> RESULT_VALID seen
 };
 
 class PlcClient {

@@ -33,11 +33,16 @@ bool parse_int(const char* text, long lo, long hi, long& out) {
 
 const char* verdict_text(const CycleResult& c) {
   switch (c.result.code) {
-    case regs::ResultCode::kOk: return "PASS";
-    case regs::ResultCode::kFormNok: return "FAIL (form)";
-    case regs::ResultCode::kScanFailed: return "NO RESULT (scan failed)";
-    case regs::ResultCode::kAnalysisFailed: return "NO RESULT (analysis failed)";
-    default: return "NO DATA";
+    case regs::ResultCode::kOk:
+      return "PASS";
+    case regs::ResultCode::kFormNok:
+      return "FAIL (form)";
+    case regs::ResultCode::kScanFailed:
+      return "NO RESULT (scan failed)";
+    case regs::ResultCode::kAnalysisFailed:
+      return "NO RESULT (analysis failed)";
+    default:
+      return "NO DATA";
   }
 }
 
@@ -46,12 +51,13 @@ void print_cycle(int index, std::uint16_t job, std::uint16_t part, const CycleRe
   for (std::size_t j = 0; j < c.result.springback_mdeg.size(); ++j) {
     bends << (j ? " " : "") << c.result.springback_mdeg[j] / 1000.0;
   }
-  std::printf("cycle %d: job %u part %u: %s seq %u, max deviation %.3f mm, rms %.3f mm, "
-              "springback [%s] deg, %zu vectors (%d reads); trigger->ack %.1f ms, "
-              "trigger->result valid %.1f ms\n",
-              index, job, part, verdict_text(c), c.result.seq, c.result.max_deviation_um / 1000.0,
-              c.result.rms_deviation_um / 1000.0, bends.str().c_str(), c.result.vectors_um.size(),
-              c.result.reads, c.trigger_to_ack_ms, c.trigger_to_valid_ms);
+  std::printf(
+      "cycle %d: job %u part %u: %s seq %u, max deviation %.3f mm, rms %.3f mm, "
+      "springback [%s] deg, %zu vectors (%d reads); trigger->ack %.1f ms, "
+      "trigger->result valid %.1f ms\n",
+      index, job, part, verdict_text(c), c.result.seq, c.result.max_deviation_um / 1000.0,
+      c.result.rms_deviation_um / 1000.0, bends.str().c_str(), c.result.vectors_um.size(),
+      c.result.reads, c.trigger_to_ack_ms, c.trigger_to_valid_ms);
   std::fflush(stdout);
 }
 
@@ -82,10 +88,10 @@ int main(int argc, char** argv) {
       job_start = value;
     } else if (arg == "--timeout" && parse_int(next, 1, 3600, value)) {
       settings.step_timeout_s = static_cast<double>(value);
-    } else if (arg == "--word-order" && (std::strcmp(next, "abcd") == 0 ||
-                                         std::strcmp(next, "cdab") == 0)) {
-      settings.word_order = std::strcmp(next, "cdab") == 0 ? regs::WordOrder::kCdab
-                                                           : regs::WordOrder::kAbcd;
+    } else if (arg == "--word-order" &&
+               (std::strcmp(next, "abcd") == 0 || std::strcmp(next, "cdab") == 0)) {
+      settings.word_order =
+          std::strcmp(next, "cdab") == 0 ? regs::WordOrder::kCdab : regs::WordOrder::kAbcd;
     } else if (arg == "--parts") {
       parts.clear();
       std::stringstream list(next);

@@ -97,8 +97,7 @@ std::vector<drivers::ProbeRecord> probe_grid(const analysis::PointCloud& surface
     const double a = (q.dot(u) - u0) / s.grid_step_mm, b = (q.dot(v) - v0) / s.grid_step_mm;
     const long iu = std::lround(a), iv = std::lround(b);
     if (iu < 0 || iv < 0 || iu >= long(nu) || iv >= long(nv)) continue;
-    if (std::hypot(a - double(iu), b - double(iv)) * s.grid_step_mm > s.capture_radius_mm)
-      continue;
+    if (std::hypot(a - double(iu), b - double(iv)) * s.grid_step_mm > s.capture_radius_mm) continue;
     auto& best = first[static_cast<std::size_t>(iu) * nv + static_cast<std::size_t>(iv)];
     if (best < 0 || q.dot(d) < surface.points[static_cast<std::size_t>(best)].dot(d))
       best = static_cast<std::int64_t>(i);

@@ -17,10 +17,10 @@ namespace springscan::simulators {
 
 /// Measurement imperfections shared by both kinds.
 struct NoiseSettings {
-  double sigma_mm = 0.02;           ///< Gaussian noise along the measuring direction
-  double outlier_fraction = 0.0;    ///< share of points displaced by up to outlier_mm
-  double outlier_mm = 2.0;          ///< largest outlier displacement
-  double missing_fraction = 0.0;    ///< share of points reported missing (laser: NaN)
+  double sigma_mm = 0.02;         ///< Gaussian noise along the measuring direction
+  double outlier_fraction = 0.0;  ///< share of points displaced by up to outlier_mm
+  double outlier_mm = 2.0;        ///< largest outlier displacement
+  double missing_fraction = 0.0;  ///< share of points reported missing (laser: NaN)
 };
 
 struct LaserPatternSettings {

@@ -26,7 +26,8 @@ void ScannerDevice::receive(std::span<const std::uint8_t> bytes) {
     if (status == drivers::DecodeStatus::kFrame) {
       handle(frame);
     } else {
-      emit_error(p::DeviceErrorCode::kBadFrame, 0, "command frame rejected: " + drivers::to_string(status));
+      emit_error(p::DeviceErrorCode::kBadFrame, 0,
+                 "command frame rejected: " + drivers::to_string(status));
     }
   }
 }
@@ -80,16 +81,18 @@ void ScannerDevice::start_scan(std::uint32_t command_sequence) {
     const auto profiles = laser_profiles(surface_, settings_.laser, settings_.noise, rng_);
     for (std::size_t k = 0; k < profiles.size(); ++k) {
       const auto t = static_cast<std::uint64_t>(duration_us * double(k) / double(profiles.size()));
-      frames_.push_back(drivers::encode_laser_profile(static_cast<std::uint32_t>(k),
-                                                      profiles[k].encoder_mm, t, profiles[k].points));
+      frames_.push_back(drivers::encode_laser_profile(
+          static_cast<std::uint32_t>(k), profiles[k].encoder_mm, t, profiles[k].points));
       scan_points_ += profiles[k].points.size();
     }
   } else {
     const auto records = probe_grid(surface_, settings_.probe, settings_.noise, rng_);
-    const auto per = static_cast<std::size_t>(std::clamp(settings_.probe.records_per_frame, 1, 1024));
+    const auto per =
+        static_cast<std::size_t>(std::clamp(settings_.probe.records_per_frame, 1, 1024));
     for (std::size_t first = 0; first < records.size(); first += per) {
       const std::size_t n = std::min(per, records.size() - first);
-      const auto t = static_cast<std::uint64_t>(duration_us * double(first) / double(records.size()));
+      const auto t =
+          static_cast<std::uint64_t>(duration_us * double(first) / double(records.size()));
       frames_.push_back(drivers::encode_probe_batch(static_cast<std::uint32_t>(first), t,
                                                     std::span(records).subspan(first, n)));
     }
@@ -124,9 +127,8 @@ void ScannerDevice::emit(p::MessageType type, std::span<const std::uint8_t> payl
 
 void ScannerDevice::emit_error(p::DeviceErrorCode code, std::uint32_t command_sequence,
                                const std::string& message) {
-  emit(p::MessageType::kError,
-       drivers::encode(drivers::DeviceError{static_cast<std::uint16_t>(code), command_sequence,
-                                            message}));
+  emit(p::MessageType::kError, drivers::encode(drivers::DeviceError{
+                                   static_cast<std::uint16_t>(code), command_sequence, message}));
 }
 
 bool ScannerDevice::fault_due(double& fraction) {

@@ -31,13 +31,13 @@ struct DeviceFaults {
 struct ScannerDeviceSettings {
   drivers::Identity identity{drivers::protocol::ScannerKind::kLaserLine, "SL-200 simulated",
                              "SIM0001", "1.0.0"};
-  drivers::DeviceConfig config;        ///< the configuration at power-on
-  LaserPatternSettings laser;          ///< laser line pattern (kind kLaserLine)
-  ProbePatternSettings probe;          ///< probe grid (kind kTactileProbe)
-  NoiseSettings noise;                 ///< measurement noise, outliers, missing points
-  double scan_duration_s = 0.0;        ///< data spread evenly over this time; 0: as fast as read
-  DeviceFaults faults;                 ///< injected faults
-  std::uint32_t seed = 1;              ///< noise seed; each scan continues the sequence
+  drivers::DeviceConfig config;  ///< the configuration at power-on
+  LaserPatternSettings laser;    ///< laser line pattern (kind kLaserLine)
+  ProbePatternSettings probe;    ///< probe grid (kind kTactileProbe)
+  NoiseSettings noise;           ///< measurement noise, outliers, missing points
+  double scan_duration_s = 0.0;  ///< data spread evenly over this time; 0: as fast as read
+  DeviceFaults faults;           ///< injected faults
+  std::uint32_t seed = 1;        ///< noise seed; each scan continues the sequence
 };
 
 /// Where the emulation should act on a fault that is not just bytes.

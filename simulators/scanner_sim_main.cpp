@@ -98,7 +98,8 @@ int main(int argc, char** argv) {
     }
     if (!device.plugged() && options->replug_after_s >= 0.0) {
       if (unplugged_since == Clock::time_point{}) unplugged_since = Clock::now();
-      if (Clock::now() - unplugged_since >= std::chrono::duration<double>(options->replug_after_s)) {
+      if (Clock::now() - unplugged_since >=
+          std::chrono::duration<double>(options->replug_after_s)) {
         device.set_faults({});  // the fault happened; the device comes back healthy
         device.plug();
         unplugged_since = {};

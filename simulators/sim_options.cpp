@@ -36,9 +36,12 @@ analysis::Expected<std::vector<double>> number_list(const std::string& name,
 // Every option that takes a number, and where it goes.
 std::map<std::string, double*> number_options(SimOptions& o) {
   auto& d = o.device;
-  return {{"noise", &d.noise.sigma_mm},          {"outliers", &d.noise.outlier_fraction},
-          {"missing", &d.noise.missing_fraction}, {"duration", &d.scan_duration_s},
-          {"step", &d.laser.step_mm},            {"grid", &d.probe.grid_step_mm},
+  return {{"noise", &d.noise.sigma_mm},
+          {"outliers", &d.noise.outlier_fraction},
+          {"missing", &d.noise.missing_fraction},
+          {"duration", &d.scan_duration_s},
+          {"step", &d.laser.step_mm},
+          {"grid", &d.probe.grid_step_mm},
           {"unplug-at", &d.faults.unplug_at_fraction},
           {"stall-at", &d.faults.stall_at_fraction},
           {"halt-at", &d.faults.halt_at_fraction},
@@ -102,7 +105,8 @@ analysis::Expected<SimOptions> parse_sim_options(int argc, char** argv) {
       if (!list) return list.error();
       o.springback_deg = *list;
     } else if (name == "points" || name == "seed" || name == "stylus") {
-      if (!to_number(value, v) || v < 0) return fail("--" + name + " " + value + ": not a number >= 0");
+      if (!to_number(value, v) || v < 0)
+        return fail("--" + name + " " + value + ": not a number >= 0");
       if (name == "points") o.device.laser.points_per_profile = static_cast<int>(v);
       if (name == "seed") o.device.seed = static_cast<std::uint32_t>(v);
       if (name == "stylus") o.device.probe.stylus_radius_mm = static_cast<float>(v);
@@ -116,7 +120,8 @@ analysis::Expected<SimOptions> parse_sim_options(int argc, char** argv) {
   id.model = kind == "laser" ? "SL-200 simulated" : "TP-20 simulated";
   if (o.device.laser.points_per_profile < 1 || o.device.laser.points_per_profile > 4096)
     return fail("--points " + std::to_string(o.device.laser.points_per_profile) + ": 1..4096");
-  o.device.config.points_per_profile = static_cast<std::uint16_t>(o.device.laser.points_per_profile);
+  o.device.config.points_per_profile =
+      static_cast<std::uint16_t>(o.device.laser.points_per_profile);
   if (!(o.device.laser.step_mm > 0.0) || !(o.device.probe.grid_step_mm > 0.0))
     return fail("--step and --grid must be positive");
   return o;

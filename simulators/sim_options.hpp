@@ -12,14 +12,14 @@
 namespace springscan::simulators {
 
 struct SimOptions {
-  bool help = false;                 ///< --help was given
-  ScannerDeviceSettings device;      ///< kind, identity, pattern, noise, duration, faults
-  std::string part_path;             ///< --part: a point file of the part surface (part frame)
-  std::string profile = "hat";       ///< --profile: an analytic sheet part when no --part
+  bool help = false;                   ///< --help was given
+  ScannerDeviceSettings device;        ///< kind, identity, pattern, noise, duration, faults
+  std::string part_path;               ///< --part: a point file of the part surface (part frame)
+  std::string profile = "hat";         ///< --profile: an analytic sheet part when no --part
   std::vector<double> springback_deg;  ///< --springback: per bend of the analytic part
-  int surface_points = 150000;       ///< dense samples of the analytic part
-  double replug_after_s = 1.0;       ///< after an unplug fault; < 0: stay unplugged
-  std::vector<std::string> command;  ///< after "--": the program to run under the emulation
+  int surface_points = 150000;         ///< dense samples of the analytic part
+  double replug_after_s = 1.0;         ///< after an unplug fault; < 0: stay unplugged
+  std::vector<std::string> command;    ///< after "--": the program to run under the emulation
 };
 
 /// Parses argv; errors name the option and the value.

@@ -54,7 +54,7 @@ std::vector<std::uint8_t> EmulatedUsbScanner::Impl::descriptors() const {
   put16(d, product_id);
   put16(d, 0x0100);  // bcdDevice
   d.insert(d.end(), {p::kStringManufacturer, p::kStringProduct, p::kStringSerial, 1});
-  d.insert(d.end(), {9, 2, 32, 0, 1, 1, 0, 0x80, 50});        // configuration, 32 bytes total
+  d.insert(d.end(), {9, 2, 32, 0, 1, 1, 0, 0x80, 50});  // configuration, 32 bytes total
   d.insert(d.end(), {9, 4, p::kInterfaceNumber, 0, 2, 0xFF, 0, 0, 0});  // interface 0
   for (const std::uint8_t ep : {p::kEndpointIn, p::kEndpointOut}) {
     d.insert(d.end(), {7, 5, ep, 2});  // bulk
@@ -64,7 +64,8 @@ std::vector<std::uint8_t> EmulatedUsbScanner::Impl::descriptors() const {
   return d;
 }
 
-std::vector<std::uint8_t> EmulatedUsbScanner::Impl::control_reply(const std::uint8_t setup[8]) const {
+std::vector<std::uint8_t> EmulatedUsbScanner::Impl::control_reply(
+    const std::uint8_t setup[8]) const {
   const std::uint8_t request_type = setup[0], request = setup[1];
   const std::uint8_t index = setup[2], type = setup[3];
   if (request_type != 0x80 || request != 6) return {};  // only standard GET_DESCRIPTOR
@@ -90,28 +91,27 @@ analysis::Expected<std::unique_ptr<EmulatedUsbScanner>> EmulatedUsbScanner::crea
   char bus[4], dev[4];
   std::snprintf(bus, sizeof bus, "%03d", settings.bus_number);
   std::snprintf(dev, sizeof dev, "%03d", settings.device_number);
-  impl->product_id = settings.product_id != 0 ? settings.product_id
+  impl->product_id = settings.product_id != 0                             ? settings.product_id
                      : device.identity.kind == p::ScannerKind::kLaserLine ? p::kProductIdLaser
-                                                                         : p::kProductIdTactile;
+                                                                          : p::kProductIdTactile;
   impl->device_settings = device;
   impl->surface = std::move(surface);
   const std::string port = std::to_string(settings.bus_number) + "-1";
-  impl->sysfs_path = "/devices/pci0000:00/0000:00:14.0/usb" +
-                     std::to_string(settings.bus_number) + "/" + port;
+  impl->sysfs_path =
+      "/devices/pci0000:00/0000:00:14.0/usb" + std::to_string(settings.bus_number) + "/" + port;
   impl->dev_node = std::string("/dev/bus/usb/") + bus + "/" + dev;
-  impl->description = "P: " + impl->sysfs_path + "\nN: bus/usb/" + bus + "/" + dev +
-                      "\nE: SUBSYSTEM=usb\nE: DRIVER=usb\nE: DEVTYPE=usb_device\nE: BUSNUM=" +
-                      bus + "\nE: DEVNUM=" + dev + "\nE: DEVNAME=" + impl->dev_node +
-                      "\nA: busnum=" + std::to_string(settings.bus_number) +
-                      "\\n\nA: devnum=" + std::to_string(settings.device_number) +
-                      "\\n\nA: bConfigurationValue=1\\n\nA: speed=480\\n\nA: serial=" +
-                      device.identity.serial + "\\n\nH: descriptors=" + hex(impl->descriptors()) +
-                      "\n";
+  impl->description =
+      "P: " + impl->sysfs_path + "\nN: bus/usb/" + bus + "/" + dev +
+      "\nE: SUBSYSTEM=usb\nE: DRIVER=usb\nE: DEVTYPE=usb_device\nE: BUSNUM=" + bus +
+      "\nE: DEVNUM=" + dev + "\nE: DEVNAME=" + impl->dev_node +
+      "\nA: busnum=" + std::to_string(settings.bus_number) +
+      "\\n\nA: devnum=" + std::to_string(settings.device_number) +
+      "\\n\nA: bConfigurationValue=1\\n\nA: speed=480\\n\nA: serial=" + device.identity.serial +
+      "\\n\nH: descriptors=" + hex(impl->descriptors()) + "\n";
   impl->testbed = umockdev_testbed_new();  // sets UMOCKDEV_DIR for this process
   impl->handler = umockdev_ioctl_base_new();
   g_signal_connect(impl->handler, "handle-ioctl", G_CALLBACK(on_handle_ioctl), impl.get());
-  g_signal_connect(impl->handler, "client-connected", G_CALLBACK(on_client_connected),
-                   impl.get());
+  g_signal_connect(impl->handler, "client-connected", G_CALLBACK(on_client_connected), impl.get());
   GError* error = nullptr;
   // The handler goes on first, so the node answers as soon as the device appears.
   if (!umockdev_testbed_attach_ioctl(impl->testbed, impl->dev_node.c_str(), impl->handler,
@@ -123,7 +123,8 @@ analysis::Expected<std::unique_ptr<EmulatedUsbScanner>> EmulatedUsbScanner::crea
   }
   auto emulator = std::unique_ptr<EmulatedUsbScanner>(new EmulatedUsbScanner(std::move(impl)));
   emulator->plug();
-  if (!emulator->plugged()) return analysis::fail("umockdev: could not add " + emulator->impl_->dev_node);
+  if (!emulator->plugged())
+    return analysis::fail("umockdev: could not add " + emulator->impl_->dev_node);
   return emulator;
 }
 

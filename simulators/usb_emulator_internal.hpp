@@ -38,9 +38,9 @@ struct EmulatedUsbScanner::Impl {
   // Set at creation, immutable afterwards.
   UMockdevTestbed* testbed = nullptr;
   UMockdevIoctlBase* handler = nullptr;
-  std::string sysfs_path;  // /devices/...
-  std::string dev_node;    // /dev/bus/usb/BBB/DDD
-  std::string description; // umockdev text record of the device
+  std::string sysfs_path;   // /devices/...
+  std::string dev_node;     // /dev/bus/usb/BBB/DDD
+  std::string description;  // umockdev text record of the device
   ScannerDeviceSettings device_settings;
   analysis::PointCloud surface;
   std::uint16_t product_id = 0;
@@ -49,13 +49,13 @@ struct EmulatedUsbScanner::Impl {
   std::unique_ptr<ScannerDevice> device;
   bool plugged = false;
   bool in_halted = false;
-  int generation = 0;                              // increments per plug
-  std::map<UMockdevIoctlClient*, int> clients;     // the generation each client opened
-  std::set<UMockdevIoctlClient*> open_clients;     // connected, each holding a reference
-  std::deque<Urb> pending_in;                      // bulk IN URBs waiting for data
-  std::deque<Urb> done;                            // completed, waiting to be reaped
+  int generation = 0;                           // increments per plug
+  std::map<UMockdevIoctlClient*, int> clients;  // the generation each client opened
+  std::set<UMockdevIoctlClient*> open_clients;  // connected, each holding a reference
+  std::deque<Urb> pending_in;                   // bulk IN URBs waiting for data
+  std::deque<Urb> done;                         // completed, waiting to be reaped
   EmulatorStats stats;
-  std::vector<std::thread> hotplug_threads;        // uevents go out off the worker thread
+  std::vector<std::thread> hotplug_threads;  // uevents go out off the worker thread
 
   /// Completes queued IN URBs from the device's output; runs the device's fault events.
   void fill_locked();

@@ -1,7 +1,7 @@
 // The usbfs ioctl handler of the emulated scanner: what the Linux kernel would answer libusb on
 // /dev/bus/usb/BBB/DDD (linux/usbdevice_fs.h), with the ScannerDevice behind the endpoints.
-#include <sys/ioctl.h>
 #include <linux/usbdevice_fs.h>
+#include <sys/ioctl.h>
 
 #include <cerrno>
 #include <cstring>
@@ -123,8 +123,8 @@ void EmulatedUsbScanner::Impl::handle_ioctl_locked(UMockdevIoctlClient* client) 
       if (!u.buffer || urb.buffer_length < 0) return complete(client, -1, EFAULT);
       ++stats.urbs_submitted;
       if (urb.type == USBDEVFS_URB_TYPE_CONTROL) {
-        const auto reply = urb.buffer_length >= 8 ? control_reply(u.buffer->data)
-                                                  : std::vector<std::uint8_t>{};
+        const auto reply =
+            urb.buffer_length >= 8 ? control_reply(u.buffer->data) : std::vector<std::uint8_t>{};
         const std::size_t room = static_cast<std::size_t>(urb.buffer_length) - 8;
         const std::size_t n = std::min(reply.size(), urb.buffer_length >= 8 ? room : 0);
         if (n > 0) std::memcpy(u.buffer->data + 8, reply.data(), n);

@@ -41,10 +41,12 @@ class CadDistance final : public SurfaceDistance {
       int worst = 0;
       for (int i = 0; i < count; ++i) {
         if (candidates[i].face == face) {
-          if (foot.squared_distance < candidates[i].foot.squared_distance) candidates[i].foot = foot;
+          if (foot.squared_distance < candidates[i].foot.squared_distance)
+            candidates[i].foot = foot;
           return;
         }
-        if (candidates[i].foot.squared_distance > candidates[worst].foot.squared_distance) worst = i;
+        if (candidates[i].foot.squared_distance > candidates[worst].foot.squared_distance)
+          worst = i;
       }
       if (count < kMaxCandidates) {
         candidates[count++] = {face, foot};
@@ -115,7 +117,8 @@ std::vector<SurfaceHit> closest_all(const SurfaceDistance& distance,
     for (std::size_t i = begin; i < end; ++i) hits[i] = distance.closest(points[i]);
   };
   std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(run, n * w / workers, n * (w + 1) / workers);
+  for (std::size_t w = 1; w < workers; ++w)
+    pool.emplace_back(run, n * w / workers, n * (w + 1) / workers);
   run(0, n / workers);
   for (auto& t : pool) t.join();
   return hits;

@@ -4,8 +4,8 @@
 #include <BRepAdaptor_Surface.hxx>
 #include <BRepLProp_SLProps.hxx>
 #include <BRep_Tool.hxx>
-#include <Extrema_GenLocateExtPS.hxx>
 #include <Extrema_ExtPC.hxx>
+#include <Extrema_GenLocateExtPS.hxx>
 #include <Extrema_POnCurv.hxx>
 #include <GeomAPI_ProjectPointOnSurf.hxx>
 #include <TopExp_Explorer.hxx>
@@ -74,7 +74,8 @@ Vec3 normal_at(const CadShape::Impl& shape, const FaceData& face, int face_id, c
 Vec3 closest_on_circle(const EdgeData& edge, const Vec3& q) {
   const Vec3 w = q - edge.center;
   const double cx = w.dot(edge.x), cy = w.dot(edge.y);
-  const Vec3 nearer_end = (edge.a - q).squaredNorm() <= (edge.b - q).squaredNorm() ? edge.a : edge.b;
+  const Vec3 nearer_end =
+      (edge.a - q).squaredNorm() <= (edge.b - q).squaredNorm() ? edge.a : edge.b;
   if (cx * cx + cy * cy == 0.0) return nearer_end;  // on the axis: every point is as close
   double t = std::atan2(cy, cx);
   t -= kTwoPi * std::floor((t - edge.t0) / kTwoPi);  // into [t0, t0 + 2 pi)

@@ -14,8 +14,7 @@ namespace springscan::analysis {
 class UvGrid {
  public:
   /// `ids`: the mesh triangle index of each UV triangle.
-  void build(std::vector<std::array<Eigen::Vector2d, 3>> triangles,
-             std::vector<std::uint32_t> ids);
+  void build(std::vector<std::array<Eigen::Vector2d, 3>> triangles, std::vector<std::uint32_t> ids);
   /// The mesh triangle containing uv (barycentric tolerance 1e-9 of its area), or -1.
   int locate(const Eigen::Vector2d& uv) const;
   /// True when uv lies in the grid's box grown by `margin`.
@@ -46,8 +45,8 @@ struct EdgeData {
 struct FaceData {
   AnalyticSurface surface;
   UvGrid grid;
-  double slack_mm = 0.0;       ///< |true distance - mesh distance| bound: 2 deflection + margin
-  std::vector<int> edges;      ///< indices into the edge table
+  double slack_mm = 0.0;   ///< |true distance - mesh distance| bound: 2 deflection + margin
+  std::vector<int> edges;  ///< indices into the edge table
 };
 
 /// The closest point of one face to q, with the outward normal there.

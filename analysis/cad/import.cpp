@@ -1,11 +1,11 @@
 // IGES / STEP / BRep import: read, convert to mm, sew, heal (issue 4). The shape is then counted
 // and tessellated by make_cad_shape (cad_shape.cpp).
+#include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepBuilderAPI_Transform.hxx>
 #include <BRepTools.hxx>
 #include <BRep_Builder.hxx>
 #include <Bnd_Box.hxx>
-#include <BRepBndLib.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <IGESControl_Reader.hxx>
 #include <Interface_Static.hxx>
@@ -16,12 +16,12 @@
 #include <ShapeAnalysis_FreeBounds.hxx>
 #include <ShapeFix_Shape.hxx>
 #include <ShapeFix_Solid.hxx>
-#include <TopoDS_Solid.hxx>
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Solid.hxx>
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
@@ -47,10 +47,14 @@ Format format_of(const std::string& path) {
 
 const char* format_name(Format format) {
   switch (format) {
-    case Format::kIges: return "IGES";
-    case Format::kStep: return "STEP";
-    case Format::kBrep: return "BREP";
-    case Format::kUnknown: break;
+    case Format::kIges:
+      return "IGES";
+    case Format::kStep:
+      return "STEP";
+    case Format::kBrep:
+      return "BREP";
+    case Format::kUnknown:
+      break;
   }
   return "unknown";
 }
@@ -97,7 +101,8 @@ TopoDS_Shape close_into_solids(const TopoDS_Shape& shape) {
   if (shells.Extent() != 1 || TopExp_Explorer(shape, TopAbs_SOLID).More()) return shape;
   const TopoDS_Shell& shell = TopoDS::Shell(shells(1));
   ShapeAnalysis_FreeBounds bounds(shell);
-  if (!bounds.GetClosedWires().IsNull() && TopExp_Explorer(bounds.GetClosedWires(), TopAbs_EDGE).More())
+  if (!bounds.GetClosedWires().IsNull() &&
+      TopExp_Explorer(bounds.GetClosedWires(), TopAbs_EDGE).More())
     return shape;
   if (!bounds.GetOpenWires().IsNull() && TopExp_Explorer(bounds.GetOpenWires(), TopAbs_EDGE).More())
     return shape;
@@ -143,10 +148,14 @@ TopoDS_Shape apply_plausible_scale(const TopoDS_Shape& shape, const CadImportSet
 
 Expected<TopoDS_Shape> read_any(const std::string& path, Format format) {
   switch (format) {
-    case Format::kIges: return read_exchange<IGESControl_Reader>(path, "IGES");
-    case Format::kStep: return read_exchange<STEPControl_Reader>(path, "STEP");
-    case Format::kBrep: return read_brep(path);
-    case Format::kUnknown: break;
+    case Format::kIges:
+      return read_exchange<IGESControl_Reader>(path, "IGES");
+    case Format::kStep:
+      return read_exchange<STEPControl_Reader>(path, "STEP");
+    case Format::kBrep:
+      return read_brep(path);
+    case Format::kUnknown:
+      break;
   }
   return fail(path + ": unsupported file type (expected .igs, .iges, .stp, .step or .brep)");
 }

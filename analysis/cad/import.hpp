@@ -15,33 +15,33 @@
 namespace springscan::analysis {
 
 struct CadImportSettings {
-  double sewing_tolerance_mm = 0.01;    ///< gap closed when loose faces are sewn into shells
-  bool sew_loose_faces = true;          ///< sew faces that belong to no shell (typical of IGES)
-  bool heal = true;                     ///< run ShapeFix_Shape (tolerances, wires, orientation)
+  double sewing_tolerance_mm = 0.01;  ///< gap closed when loose faces are sewn into shells
+  bool sew_loose_faces = true;        ///< sew faces that belong to no shell (typical of IGES)
+  bool heal = true;                   ///< run ShapeFix_Shape (tolerances, wires, orientation)
   /// A part whose bounding-box diagonal is below this after unit conversion is taken to be
   /// written in metres under a millimetre header (e.g. OCCT's bearing.iges) and scaled by 1000.
   /// Press-line parts are never this small; 0 disables the rule.
   double min_plausible_size_mm = 1.0;
-  double linear_deflection_mm = 0.05;   ///< tessellation chord tolerance (BRepMesh)
-  double angular_deflection_deg = 10.0; ///< tessellation angle tolerance between triangles
+  double linear_deflection_mm = 0.05;    ///< tessellation chord tolerance (BRepMesh)
+  double angular_deflection_deg = 10.0;  ///< tessellation angle tolerance between triangles
 };
 
 /// What the import found, for `springscan model` and for logs.
 struct CadLoadReport {
-  std::string file;             ///< the path as given
-  std::string format;           ///< "IGES", "STEP", "BREP" or "built" (made in memory)
+  std::string file;    ///< the path as given
+  std::string format;  ///< "IGES", "STEP", "BREP" or "built" (made in memory)
   int faces = 0;
   int shells = 0;
   int solids = 0;
-  int free_edges = 0;           ///< edges bounding only one face: open boundaries, gaps
+  int free_edges = 0;  ///< edges bounding only one face: open boundaries, gaps
   double area_mm2 = 0.0;
   Vec3 bbox_min = Vec3::Zero();
   Vec3 bbox_max = Vec3::Zero();
-  bool sewn = false;            ///< loose faces were sewn
-  bool healed = false;          ///< ShapeFix_Shape ran
-  double scale_applied = 1.0;   ///< extra factor of the metre-scale rule (1 or 1000)
+  bool sewn = false;           ///< loose faces were sewn
+  bool healed = false;         ///< ShapeFix_Shape ran
+  double scale_applied = 1.0;  ///< extra factor of the metre-scale rule (1 or 1000)
   int triangles = 0;
-  int faces_without_mesh = 0;   ///< faces BRepMesh could not tessellate (never sampled)
+  int faces_without_mesh = 0;  ///< faces BRepMesh could not tessellate (never sampled)
 };
 
 /// The tessellation in our types. Triangles wind counter-clockwise around the face's outward

@@ -10,8 +10,8 @@
 #include <TopoDS_Shape.hxx>
 #include <memory>
 #include <mutex>
-#include <vector>
 #include <string>
+#include <vector>
 
 #include "analysis/cad/import.hpp"
 
@@ -62,8 +62,6 @@ struct CadShape::Impl {
 
   const TopoDS_Face& face(int id) const { return TopoDS::Face(faces(id + 1)); }
 };
-
-
 
 /// OpenCASCADE's data exchange keeps its parameters (units, modes) in process-wide statics
 /// (Interface_Static), so every reader and writer call holds this lock.

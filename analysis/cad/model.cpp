@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "analysis/cad/internal.hpp"
-#include "analysis/messages/cad_model_proto.hpp"
 #include "analysis/io/sha256.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -22,7 +22,8 @@ Expected<PartModel> build_model(const CadShape& shape, const CadModelSettings& s
   try {
     model.segmentation = segment_cad(shape, settings.segmentation);
   } catch (const Standard_Failure& e) {
-    return fail(describe_occt_failure(shape.report().file + ": segmentation", e.GetMessageString()));
+    return fail(
+        describe_occt_failure(shape.report().file + ": segmentation", e.GetMessageString()));
   }
   model.face_count = shape.face_count();
   model.distance = make_cad_distance(shape, settings.distance);

@@ -28,8 +28,8 @@ Expected<PartModel> load_part_model(const std::string& path, const CadModelSetti
 /// A model from the cache or freshly built, and how it was obtained.
 struct CachedModelLoad {
   PartModel model;
-  bool cache_hit = false;   ///< true: read from cache_file, no IGES/STEP parsing or healing
-  std::string cache_file;   ///< where the model is (or would have been) cached
+  bool cache_hit = false;  ///< true: read from cache_file, no IGES/STEP parsing or healing
+  std::string cache_file;  ///< where the model is (or would have been) cached
   std::string source_sha256;
   std::string cache_error;  ///< non-empty when the cache could not be written (the model is fine)
 };

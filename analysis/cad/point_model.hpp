@@ -6,8 +6,8 @@
 #include <cstddef>
 
 #include "analysis/core/expected.hpp"
-#include "analysis/preprocess/normals.hpp"
 #include "analysis/core/part_model.hpp"
+#include "analysis/preprocess/normals.hpp"
 
 namespace springscan::analysis {
 

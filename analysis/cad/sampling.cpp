@@ -68,10 +68,10 @@ void sample_face(const CadShape::Impl& shape, int face_id, const FaceTriangles& 
   // drawn again; the attempt cap only guards against a face the classifier rejects entirely.
   for (int s = 0, attempts = 0; s < count && attempts < 20 * count + 100; ++attempts) {
     const double pick = unit(rng) * face.area();
-    const auto it = std::lower_bound(face.cumulative_area.begin(), face.cumulative_area.end(), pick);
-    const auto slot = static_cast<std::size_t>(
-        std::min<std::ptrdiff_t>(it - face.cumulative_area.begin(),
-                                 static_cast<std::ptrdiff_t>(face.triangles.size()) - 1));
+    const auto it =
+        std::lower_bound(face.cumulative_area.begin(), face.cumulative_area.end(), pick);
+    const auto slot = static_cast<std::size_t>(std::min<std::ptrdiff_t>(
+        it - face.cumulative_area.begin(), static_cast<std::ptrdiff_t>(face.triangles.size()) - 1));
     const std::size_t triangle = face.triangles[slot];
     const auto& tri = mesh.triangles[triangle];
     // Uniform point in a triangle: (1 - sqrt(r1), sqrt(r1) (1 - r2), sqrt(r1) r2).

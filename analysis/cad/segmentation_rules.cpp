@@ -19,7 +19,8 @@ struct Groups {
   explicit Groups(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
   int find(int i) {
     while (parent[static_cast<std::size_t>(i)] != i)
-      i = parent[static_cast<std::size_t>(i)] = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
+      i = parent[static_cast<std::size_t>(i)] =
+          parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])];
     return i;
   }
   void unite(int a, int b) {
@@ -50,7 +51,9 @@ PlaneGroup make_plane_group(const std::vector<CadFaceInfo>& infos, std::vector<i
   g.largest = g.faces.front();
   for (int f : g.faces) {
     g.area += infos[static_cast<std::size_t>(f)].area_mm2;
-    if (infos[static_cast<std::size_t>(f)].area_mm2 > infos[static_cast<std::size_t>(g.largest)].area_mm2) g.largest = f;
+    if (infos[static_cast<std::size_t>(f)].area_mm2 >
+        infos[static_cast<std::size_t>(g.largest)].area_mm2)
+      g.largest = f;
   }
   g.normal = infos[static_cast<std::size_t>(g.largest)].direction;
   g.point = infos[static_cast<std::size_t>(g.largest)].inner_point;
@@ -101,13 +104,15 @@ FlangeTable find_flanges(const CadShape& shape, const std::vector<CadFaceInfo>& 
     planar[static_cast<std::size_t>(f.id)] = f.type == "plane";
     for (int n : f.neighbors) {
       const auto& g = infos[static_cast<std::size_t>(n)];
-      if (f.type != "plane" || g.type != "plane" || f.direction.dot(g.direction) < cos_tol) continue;
+      if (f.type != "plane" || g.type != "plane" || f.direction.dot(g.direction) < cos_tol)
+        continue;
       if (std::abs((g.centroid - f.centroid).dot(f.direction)) <= settings.coplanar_distance_mm)
         groups.unite(f.id, n);
     }
   }
   std::vector<PlaneGroup> planes;
-  for (auto& [root, members] : groups.members(planar)) planes.push_back(make_plane_group(infos, members));
+  for (auto& [root, members] : groups.members(planar))
+    planes.push_back(make_plane_group(infos, members));
   // Pair the sides of each solid sheet, the thinnest partner first.
   std::vector<int> partner(planes.size(), -1);
   std::vector<double> pair_thickness(planes.size(), 0.0);
@@ -126,9 +131,10 @@ FlangeTable find_flanges(const CadShape& shape, const std::vector<CadFaceInfo>& 
   for (std::size_t i = 0; i < planes.size(); ++i) {
     const int j = partner[i];
     if (j >= 0 && static_cast<std::size_t>(j) < i) continue;  // added with its partner
-    if (solid && j < 0) continue;  // a sheet edge or cut face: "other"
+    if (solid && j < 0) continue;                             // a sheet edge or cut face: "other"
     // The reported side: the larger one (ties: the first face).
-    const bool other_side = j >= 0 && planes[static_cast<std::size_t>(j)].area > planes[i].area + 1e-9;
+    const bool other_side =
+        j >= 0 && planes[static_cast<std::size_t>(j)].area > planes[i].area + 1e-9;
     const PlaneGroup& side = other_side ? planes[static_cast<std::size_t>(j)] : planes[i];
     Flange flange;
     flange.id = static_cast<int>(table.flanges.size());
@@ -176,8 +182,10 @@ std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInf
     // A bend's axis lies parallel to both flanges (a hole's axis crosses them).
     const Vec3& axis = infos[static_cast<std::size_t>(members.front())].direction;
     const double sin_tol = std::sin(settings.coplanar_angle_deg / kRadToDeg);
-    if (std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(*touched.begin())].normal)) > sin_tol ||
-        std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(*touched.rbegin())].normal)) > sin_tol)
+    if (std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(*touched.begin())].normal)) >
+            sin_tol ||
+        std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(*touched.rbegin())].normal)) >
+            sin_tol)
       continue;
     bool merged = false;
     for (auto& [faces, pair] : candidates) {
@@ -186,7 +194,8 @@ std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInf
       // thickness, like the roof sheet of SOURCES.md), as long as the axes are parallel.
       const Vec3& d0 = infos[static_cast<std::size_t>(faces.front())].direction;
       const Vec3& d1 = infos[static_cast<std::size_t>(members.front())].direction;
-      if (pair != touched || std::abs(d0.dot(d1)) < std::cos(settings.coplanar_angle_deg / kRadToDeg))
+      if (pair != touched ||
+          std::abs(d0.dot(d1)) < std::cos(settings.coplanar_angle_deg / kRadToDeg))
         continue;
       faces.insert(faces.end(), members.begin(), members.end());
       std::sort(faces.begin(), faces.end());
@@ -213,14 +222,16 @@ std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInf
       (info.convex ? convex : concave) = std::min(info.convex ? convex : concave, info.radius_mm);
     }
     centroid /= std::max(area, 1e-300);
-    bend.axis_point = first.axis_point + (centroid - first.axis_point).dot(bend.axis_direction) *
-                                             bend.axis_direction;
+    bend.axis_point = first.axis_point +
+                      (centroid - first.axis_point).dot(bend.axis_direction) * bend.axis_direction;
     // Inner radius: a shell has one surface; a solid's concave side is the inside of the bend,
     // and with only a rounded outside the inside is the outer radius minus the thickness.
     const double t = std::max(flanges.thickness_mm[static_cast<std::size_t>(bend.flange_a)],
                               flanges.thickness_mm[static_cast<std::size_t>(bend.flange_b)]);
-    if (!solid) bend.radius_mm = std::min(concave, convex);
-    else bend.radius_mm = std::isfinite(concave) ? concave : std::max(convex - t, 0.0);
+    if (!solid)
+      bend.radius_mm = std::min(concave, convex);
+    else
+      bend.radius_mm = std::isfinite(concave) ? concave : std::max(convex - t, 0.0);
     bend.nominal_angle_deg = bend_angle_deg(shape, infos, flanges, bend);
     bends.push_back(std::move(bend));
   }

@@ -1,8 +1,8 @@
 // Closed forms of planar and cylindrical faces (AnalyticSurface, cad_internal.hpp), used by the
 // exact distance and the segmentation without calling OpenCASCADE per query.
 #include <BRep_Tool.hxx>
-#include <Geom_CylindricalSurface.hxx>
 #include <Geom_Circle.hxx>
+#include <Geom_CylindricalSurface.hxx>
 #include <Geom_Line.hxx>
 #include <Geom_Plane.hxx>
 #include <Geom_RectangularTrimmedSurface.hxx>

@@ -38,7 +38,8 @@ bool metric_uv(const AnalyticSurface& s, const Eigen::Vector2d& uv, Eigen::Vecto
 double segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
                         const Eigen::Vector2d& b) {
   const Eigen::Vector2d d = b - a;
-  const double t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+  const double t =
+      d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
   return (p - (a + t * d)).norm();
 }
 

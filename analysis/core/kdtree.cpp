@@ -1,10 +1,8 @@
 #include "analysis/core/kdtree.hpp"
 
-#include <nanoflann.hpp>
-
-#include <cmath>
-
 #include <array>
+#include <cmath>
+#include <nanoflann.hpp>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -129,10 +127,8 @@ struct Lifted {
   }
 };
 
-using LiftedIndex =
-    nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Lifted, double,
-                                                                     std::uint32_t>,
-                                        Lifted, 4, std::uint32_t>;
+using LiftedIndex = nanoflann::KDTreeSingleIndexAdaptor<
+    nanoflann::L2_Simple_Adaptor<double, Lifted, double, std::uint32_t>, Lifted, 4, std::uint32_t>;
 
 Lifted lift(const std::vector<Vec3>& points, const std::vector<double>& weights) {
   if (points.size() != weights.size()) {
@@ -155,7 +151,9 @@ Lifted lift(const std::vector<Vec3>& points, const std::vector<double>& weights)
 
 struct WeightedKdTree::Impl {
   Impl(const std::vector<Vec3>& p, const std::vector<double>& w, const KdTreeSettings& settings)
-      : points(p), weights(w), lifted(lift(p, w)),
+      : points(p),
+        weights(w),
+        lifted(lift(p, w)),
         index(4, lifted,
               nanoflann::KDTreeSingleIndexAdaptorParams(
                   static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {}

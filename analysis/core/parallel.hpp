@@ -5,14 +5,13 @@
 
 #include <algorithm>
 #include <atomic>
-#include <thread>
 #include <cstddef>
+#include <thread>
 #include <vector>
 
 #include "analysis/core/point_cloud.hpp"
 
 namespace springscan::analysis {
-
 
 /// Number of worker threads for a `threads` setting: 0 means hardware_concurrency.
 inline unsigned resolve_threads(int threads) {
@@ -48,7 +47,6 @@ void for_each_block(std::size_t count, std::size_t block_size, int threads, Fn&&
   work();
   for (auto& thread : pool) thread.join();
 }
-
 
 /// Points per block of a parallel point loop.
 inline constexpr std::size_t kParallelBlock = 4096;

@@ -15,8 +15,8 @@ namespace springscan::analysis {
 struct Flange {
   int id = 0;
   std::vector<int> face_ids;
-  Vec3 point = Vec3::Zero();   ///< a point on the plane (CAD frame, mm)
-  Vec3 normal = Vec3::UnitZ(); ///< unit plane normal, along the faces' outward orientation
+  Vec3 point = Vec3::Zero();    ///< a point on the plane (CAD frame, mm)
+  Vec3 normal = Vec3::UnitZ();  ///< unit plane normal, along the faces' outward orientation
   double area_mm2 = 0.0;
   /// Distance between the sheet's two sides when the flange has both (a solid); 0 for a
   /// surface model. `point` and `normal` are those of one side: which one, a bend's geometry
@@ -60,7 +60,7 @@ class SurfaceDistance {
 
 /// Everything the pipeline needs of the CAD side.
 struct PartModel {
-  PointCloud samples;                        ///< even samples with normals and face ids
+  PointCloud samples;  ///< even samples with normals and face ids
   PartSegmentation segmentation;
   int face_count = 0;
   std::shared_ptr<const SurfaceDistance> distance;  ///< null: distances to the samples instead

@@ -19,11 +19,11 @@ using Transform = Eigen::Isometry3d;
 using Rgb = std::array<std::uint8_t, 3>;
 
 struct PointCloud {
-  std::vector<Vec3> points;           ///< positions, mm
-  std::vector<Vec3> normals;          ///< unit normals, or empty
-  std::vector<double> scalars;        ///< one value per point (e.g. signed deviation), or empty
-  std::vector<Rgb> colors;            ///< per-point colour, or empty
-  std::vector<std::int32_t> face_ids; ///< CAD face id per point (model samples), or empty
+  std::vector<Vec3> points;            ///< positions, mm
+  std::vector<Vec3> normals;           ///< unit normals, or empty
+  std::vector<double> scalars;         ///< one value per point (e.g. signed deviation), or empty
+  std::vector<Rgb> colors;             ///< per-point colour, or empty
+  std::vector<std::int32_t> face_ids;  ///< CAD face id per point (model samples), or empty
 
   std::size_t size() const { return points.size(); }
   bool empty() const { return points.empty(); }

@@ -18,10 +18,10 @@ namespace springscan::analysis {
 
 /// The closest point of one triangle to a query point.
 struct TriangleFoot {
-  std::uint32_t triangle = 0;      ///< index into the triangles given at construction
-  double squared_distance = 0.0;   ///< mm^2
-  Vec3 point = Vec3::Zero();       ///< closest point on the triangle
-  Vec3 barycentric = Vec3::Zero(); ///< weights of the triangle's vertices 0, 1, 2
+  std::uint32_t triangle = 0;       ///< index into the triangles given at construction
+  double squared_distance = 0.0;    ///< mm^2
+  Vec3 point = Vec3::Zero();        ///< closest point on the triangle
+  Vec3 barycentric = Vec3::Zero();  ///< weights of the triangle's vertices 0, 1, 2
 };
 
 /// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5).
@@ -71,7 +71,10 @@ template <typename OnTriangle>
 double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle) const {
   if (nodes_.empty()) return 0.0;
   double best = std::numeric_limits<double>::infinity();
-  const auto bound2 = [&] { const double r = best + slack_mm; return r * r; };
+  const auto bound2 = [&] {
+    const double r = best + slack_mm;
+    return r * r;
+  };
   std::uint32_t stack[64];
   int top = 0;
   stack[top++] = 0;
@@ -92,8 +95,8 @@ double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_tri
       continue;
     }
     const std::uint32_t left = node.first, right = node.first + 1;
-    const bool left_first = box_squared_distance(nodes_[left], query) <=
-                            box_squared_distance(nodes_[right], query);
+    const bool left_first =
+        box_squared_distance(nodes_[left], query) <= box_squared_distance(nodes_[right], query);
     stack[top++] = left_first ? right : left;  // the farther child is popped last
     stack[top++] = left_first ? left : right;
   }

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <bit>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "analysis/core/parallel.hpp"
@@ -71,7 +71,6 @@ double median_spacing(const KdTree& tree) {
   return d[d.size() / 2];
 }
 
-
 // Nearest sample by plain KD-tree queries, for points outside the cell scheme.
 void nearest_each(const std::vector<Vec3>& q, const std::uint32_t* which, std::size_t count,
                   const KdTree& tree, std::vector<std::uint32_t>& out) {
@@ -137,22 +136,24 @@ std::vector<std::uint32_t> nearest_samples(const std::vector<Vec3>& points, cons
   const double guard = 2.0 * spacing;  // scan points farther off the samples: plain queries
   const CellGrouping groups = group_by_cell(points, cell);
   if (groups.offsets.empty()) {  // too fine a grid for the extent: plain queries
-    parallel_blocks(points.size(), settings.threads, [&](std::size_t, std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i) out[i] = tree.nearest(points[i])->index;
-    });
+    parallel_blocks(points.size(), settings.threads,
+                    [&](std::size_t, std::size_t b, std::size_t e) {
+                      for (std::size_t i = b; i < e; ++i) out[i] = tree.nearest(points[i])->index;
+                    });
     return out;
   }
   const double h = 0.5 * std::sqrt(3.0) * cell;
   const std::size_t cells = groups.offsets.size() - 1;
   for_each_block(cells, kCellsPerBlock, settings.threads,
                  [&](std::size_t, std::size_t begin, std::size_t end) {
-    std::vector<Neighbor> found;
-    for (std::size_t g = begin; g < end; ++g) {
-      const std::uint32_t* which = groups.order.data() + groups.offsets[g];
-      const std::size_t count = groups.offsets[g + 1] - groups.offsets[g];
-      nearest_in_cell(points, which, count, groups.centers[g], h, guard, tree, found, out);
-    }
-  });
+                   std::vector<Neighbor> found;
+                   for (std::size_t g = begin; g < end; ++g) {
+                     const std::uint32_t* which = groups.order.data() + groups.offsets[g];
+                     const std::size_t count = groups.offsets[g + 1] - groups.offsets[g];
+                     nearest_in_cell(points, which, count, groups.centers[g], h, guard, tree, found,
+                                     out);
+                   }
+                 });
   return out;
 }
 
@@ -161,7 +162,8 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
                                            const DeviationSettings& settings) {
   if (!all_finite(scan_in_cad)) return fail("deviation: the scan has non-finite coordinates");
   if (!(settings.tolerance_mm > 0.0))
-    return fail("deviation: tolerance_mm must be > 0, got " + std::to_string(settings.tolerance_mm));
+    return fail("deviation: tolerance_mm must be > 0, got " +
+                std::to_string(settings.tolerance_mm));
   DeviationResult result;
   result.exact = model.distance != nullptr;
   if (!result.exact) {
@@ -175,9 +177,10 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
   if (result.exact) {
     parallel_blocks(scan_in_cad.size(), settings.threads,
                     [&](std::size_t, std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i)
-        result.signed_distance_mm[i] = model.distance->closest(scan_in_cad[i]).signed_distance_mm;
-    });
+                      for (std::size_t i = begin; i < end; ++i)
+                        result.signed_distance_mm[i] =
+                            model.distance->closest(scan_in_cad[i]).signed_distance_mm;
+                    });
   } else {
     // Tangent plane of the nearest sample: exact on flat faces, and the sign says whether the
     // point lies above or below the surface (paper §3, Figure 7 colouring).
@@ -251,7 +254,7 @@ Rgb deviation_color(double signed_distance_mm, double scale_mm) {
   const auto level = [](double x) { return static_cast<std::uint8_t>(std::lround(255.0 * x)); };
   if (!std::isfinite(t)) return {0, 0, 0};
   if (t < 0.0) return {0, level(1.0 + t), level(-t)};  // green -> blue
-  return {level(t), level(1.0 - t), 0};                 // green -> red
+  return {level(t), level(1.0 - t), 0};                // green -> red
 }
 
 }  // namespace springscan::analysis

@@ -5,18 +5,18 @@
 #include <cmath>
 #include <sstream>
 
+#include "analysis/core/kdtree.hpp"
+#include "analysis/core/parallel.hpp"
+#include "analysis/deviation/deviation.hpp"
+#include "analysis/inspection/verdict.hpp"
 #include "analysis/matching/compensation.hpp"
 #include "analysis/matching/deformation_field.hpp"
-#include "analysis/deviation/deviation.hpp"
 #include "analysis/messages/fit_proto.hpp"
-#include "analysis/registration/global_fit.hpp"
-#include "analysis/core/kdtree.hpp"
 #include "analysis/messages/matching_proto.hpp"
-#include "analysis/core/parallel.hpp"
-#include "analysis/preprocess/reduction.hpp"
 #include "analysis/messages/settings_proto.hpp"
 #include "analysis/messages/springback_proto.hpp"
-#include "analysis/inspection/verdict.hpp"
+#include "analysis/preprocess/reduction.hpp"
+#include "analysis/registration/global_fit.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -51,15 +51,12 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto field = from_proto(m.matching());
   auto compensation = from_proto(m.compensation());
   auto verdict = from_proto(m.verdict());
-  for (const std::string* error : {threads ? nullptr : &threads.message(),
-                                   normals ? nullptr : &normals.message(),
-                                   reduction ? nullptr : &reduction.message(),
-                                   fit ? nullptr : &fit.message(),
-                                   deviation ? nullptr : &deviation.message(),
-                                   springback ? nullptr : &springback.message(),
-                                   field ? nullptr : &field.message(),
-                                   compensation ? nullptr : &compensation.message(),
-                                   verdict ? nullptr : &verdict.message()})
+  for (const std::string* error :
+       {threads ? nullptr : &threads.message(), normals ? nullptr : &normals.message(),
+        reduction ? nullptr : &reduction.message(), fit ? nullptr : &fit.message(),
+        deviation ? nullptr : &deviation.message(), springback ? nullptr : &springback.message(),
+        field ? nullptr : &field.message(), compensation ? nullptr : &compensation.message(),
+        verdict ? nullptr : &verdict.message()})
     if (error) return fail(*error);
   s.threads = *threads;
   s.normals = *normals;
@@ -115,13 +112,15 @@ std::optional<Error> check_inputs(const PartModel& model, const PointCloud& scan
   const auto [slo, shi] = bounding_box(scan.points);
   const auto [mlo, mhi] = bounding_box(model.samples.points);
   const double scan_size = (shi - slo).norm(), model_size = (mhi - mlo).norm();
-  const double ratio = std::max(scan_size, model_size) / std::max(std::min(scan_size, model_size), 1e-12);
+  const double ratio =
+      std::max(scan_size, model_size) / std::max(std::min(scan_size, model_size), 1e-12);
   std::ostringstream text;
   text << "scan extent " << scan_size << " mm vs model extent " << model_size << " mm (ratio "
        << ratio << ")";
   if (ratio >= 100.0)
-    return fail(text.str() + ": the scan and the model are probably in different units (mm vs m "
-                             "or inch); convert one of them");
+    return fail(text.str() +
+                ": the scan and the model are probably in different units (mm vs m "
+                "or inch); convert one of them");
   if (ratio >= 5.0)
     report.add_warnings(text.str() + ": a partial scan, or different units (inch vs mm?)");
   return std::nullopt;
@@ -174,9 +173,8 @@ std::optional<Error> add_deformation(const ReductionOutcome& reduced, const Tran
     report.add_warnings("compensation: " + std::to_string(comp->unsupported) +
                         " model control points have no deformation vector nearby");
   if (comp->clipped > 0)
-    report.add_warnings("compensation: " + std::to_string(comp->clipped) +
-                        " vectors clipped to " + std::to_string(s.compensation.max_magnitude_mm) +
-                        " mm");
+    report.add_warnings("compensation: " + std::to_string(comp->clipped) + " vectors clipped to " +
+                        std::to_string(s.compensation.max_magnitude_mm) + " mm");
   return std::nullopt;
 }
 
@@ -202,7 +200,8 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);
   if (!reduced) return fail(reduced.message());
-  to_proto(*reduced, config->reduction, model.samples.size(), scan.size(), report.mutable_reduction());
+  to_proto(*reduced, config->reduction, model.samples.size(), scan.size(),
+           report.mutable_reduction());
   timings.set_reduce(ms_since(t));
 
   t = Clock::now();
@@ -226,8 +225,8 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   // and on a thick sheet the nearest sample may lie on the other side.
   report.mutable_global_fit()->set_rms_residual(
       trimmed_rms(deviation->signed_distance_mm, config->global_fit.icp.trimmed_fraction));
-  out.deviation_cloud = deviation_cloud(std::move(scan_in_cad), *deviation,
-                                        report.deviation().color_scale_mm());
+  out.deviation_cloud =
+      deviation_cloud(std::move(scan_in_cad), *deviation, report.deviation().color_scale_mm());
   timings.set_deviation(ms_since(t));
 
   t = Clock::now();

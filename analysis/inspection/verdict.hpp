@@ -10,9 +10,8 @@
 //             setting; a bend that could not be measured fails when fail_unmeasured_bends;
 //   health    the deformation field covers >= min_coverage of the reduced model (when a field
 //             was computed), and the global fit's residual rms to the surface (rms_residual:
-//             the trimmed deviation rms; not rms_final, which grows with the sample spacing) <= max_fit_rms_mm:
-//             otherwise the
-//             numbers above cannot be trusted.
+//             the trimmed deviation rms; not rms_final, which grows with the sample spacing) <=
+//             max_fit_rms_mm: otherwise the numbers above cannot be trusted.
 //
 // Thread safety: pure function.
 
@@ -26,12 +25,12 @@ enum class DeviationStatistic {
 };
 
 struct VerdictSettings {
-  double tolerance_mm = 0.5;                                ///< surface deviation limit
-  double angle_tolerance_deg = 1.0;                         ///< springback limit per bend
+  double tolerance_mm = 0.5;                                          ///< surface deviation limit
+  double angle_tolerance_deg = 1.0;                                   ///< springback limit per bend
   DeviationStatistic deviation_statistic = DeviationStatistic::kP95;  ///< what is compared
-  double min_coverage = 0.9;      ///< least share of the reduced model with a field vector
-  double max_fit_rms_mm = 1.0;    ///< largest global fit residual rms (scan to surface)
-                                  ///< that still counts as a good fit
+  double min_coverage = 0.9;          ///< least share of the reduced model with a field vector
+  double max_fit_rms_mm = 1.0;        ///< largest global fit residual rms (scan to surface)
+                                      ///< that still counts as a good fit
   bool fail_unmeasured_bends = true;  ///< a bend without a measurement fails the part
 };
 

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "analysis/core/expected.hpp"
+#include "analysis/core/point_cloud.hpp"
 #include "analysis/io/io_text.hpp"
 #include "analysis/io/ply_format.hpp"
-#include "analysis/core/point_cloud.hpp"
 
 namespace springscan::analysis::io_detail {
 

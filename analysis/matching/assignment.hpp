@@ -83,10 +83,10 @@ std::size_t maximum_matching(const CandidateGraph& graph, std::vector<std::int32
 /// The outcome of a certificate check: ok, or the first violated condition with its numbers.
 struct CertificateCheck {
   bool ok = false;
-  double max_dual_violation = 0.0;   ///< max over edges of u_i + v_j - c_ij (<= tol when ok)
-  double max_matched_slack = 0.0;    ///< max over matched edges of |c_ij - u_i - v_j|
-  double duality_gap = 0.0;          ///< |total_cost - (sum u + sum v)|
-  std::string failure;               ///< empty when ok
+  double max_dual_violation = 0.0;  ///< max over edges of u_i + v_j - c_ij (<= tol when ok)
+  double max_matched_slack = 0.0;   ///< max over matched edges of |c_ij - u_i - v_j|
+  double duality_gap = 0.0;         ///< |total_cost - (sum u + sum v)|
+  std::string failure;              ///< empty when ok
 };
 
 /// Checks the certificate against every pair of a dense matrix. `tolerance` is absolute, in

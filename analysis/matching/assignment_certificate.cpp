@@ -50,8 +50,8 @@ void check_structure(std::size_t rows, std::size_t cols, const Assignment& a, do
     }
   }
   if (used != rows) {
-    check.failure = "primal: " + std::to_string(used) + " columns used by " +
-                    std::to_string(rows) + " rows";
+    check.failure =
+        "primal: " + std::to_string(used) + " columns used by " + std::to_string(rows) + " rows";
     return;
   }
   double dual_value = 0.0;
@@ -71,15 +71,15 @@ bool check_edge(std::size_t i, std::size_t j, double c, bool matched, const Assi
   const double reduced = c - a.u[i] - a.v[j];
   check.max_dual_violation = std::max(check.max_dual_violation, -reduced);
   if (reduced < -tolerance) {
-    check.failure = "dual: u[" + std::to_string(i) + "] + v[" + std::to_string(j) + "] - c = " +
-                    num(-reduced) + " > 0";
+    check.failure = "dual: u[" + std::to_string(i) + "] + v[" + std::to_string(j) +
+                    "] - c = " + num(-reduced) + " > 0";
     return false;
   }
   if (matched) {
     check.max_matched_slack = std::max(check.max_matched_slack, std::abs(reduced));
     if (std::abs(reduced) > tolerance) {
-      check.failure = "slackness: matched edge (" + std::to_string(i) + ", " +
-                      std::to_string(j) + ") has reduced cost " + num(reduced);
+      check.failure = "slackness: matched edge (" + std::to_string(i) + ", " + std::to_string(j) +
+                      ") has reduced cost " + num(reduced);
       return false;
     }
   }

@@ -233,8 +233,8 @@ Expected<Assignment> solve_dense(const DenseCostMatrix& cost) {
   }
   for (std::size_t k = 0; k < cost.values.size(); ++k) {
     if (!std::isfinite(cost.values[k])) {
-      return fail("dense assignment: cost at row " + std::to_string(k / cost.cols) +
-                  ", column " + std::to_string(k % cost.cols) + " is not finite");
+      return fail("dense assignment: cost at row " + std::to_string(k / cost.cols) + ", column " +
+                  std::to_string(k % cost.cols) + " is not finite");
     }
   }
   MatrixCosts costs(cost);

@@ -49,7 +49,9 @@ struct SlotColumns {
   std::vector<double> block_low;     ///< minimum distance of each block of kBlock slots
 
   explicit SlotColumns(const std::vector<double>& potentials)
-      : column(potentials.size()), v(potentials), dist(potentials.size()),
+      : column(potentials.size()),
+        v(potentials),
+        dist(potentials.size()),
         block_low(potentials.size() / kBlock + 1) {
     for (std::size_t j = 0; j < column.size(); ++j) column[j] = static_cast<std::int32_t>(j);
   }

@@ -14,7 +14,10 @@ constexpr std::size_t kUnreached = std::numeric_limits<std::size_t>::max();
 class HopcroftKarp {
  public:
   explicit HopcroftKarp(const CandidateGraph& g)
-      : g_(g), row_match_(g.rows, -1), col_match_(g.cols, -1), layer_(g.rows, kUnreached),
+      : g_(g),
+        row_match_(g.rows, -1),
+        col_match_(g.cols, -1),
+        layer_(g.rows, kUnreached),
         next_edge_(g.rows, 0) {}
 
   /// Starts from `start` (a column per row or -1); entries that are not an edge of their row,

@@ -113,8 +113,8 @@ namespace springscan::analysis::detail {
 /// false when the bid budget runs out (then `a` must be reset by the caller).
 template <class ScanRow>
 bool epsilon_scaling_auction(std::size_t n, const ScanRow& scan_row, double eps_start,
-                             double eps_final, double theta, double lone_gap,
-                             std::size_t max_bids, Assignment& a) {
+                             double eps_final, double theta, double lone_gap, std::size_t max_bids,
+                             Assignment& a) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   std::vector<std::int32_t> queue;
   queue.reserve(n);

@@ -102,8 +102,8 @@ double tolerance_for(const Assignment& a, double relative) {
 // Returns false when the caller should fall back to the dense solver.
 bool solve_sparse_priced(const std::vector<Vec3>& rows, const KdTree& tree,
                          const PointMatchingSettings& s, PointMatching& out) {
-  std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(s.candidate_neighbors),
-                                        tree.size());
+  std::size_t k =
+      std::min<std::size_t>(static_cast<std::size_t>(s.candidate_neighbors), tree.size());
   CandidateGraph graph = knn_graph(rows, tree, k, {});
   std::vector<std::int32_t> matching(rows.size(), -1);  // carried over: k only grows
   while (maximum_matching(graph, matching) < rows.size()) {
@@ -154,8 +154,7 @@ std::string validate(const std::vector<Vec3>& model, const std::vector<Vec3>& sc
 
 }  // namespace
 
-Expected<PointMatching> match_points(const std::vector<Vec3>& model,
-                                     const std::vector<Vec3>& scan,
+Expected<PointMatching> match_points(const std::vector<Vec3>& model, const std::vector<Vec3>& scan,
                                      const PointMatchingSettings& settings) {
   if (const std::string problem = validate(model, scan, settings); !problem.empty()) {
     return fail("matching: " + problem);

@@ -11,18 +11,18 @@
 #include <cstdint>
 #include <vector>
 
-#include "analysis/matching/assignment.hpp"
 #include "analysis/core/expected.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/matching/assignment.hpp"
 
 namespace springscan::analysis {
 
 struct PointMatchingSettings {
-  int candidate_neighbors = 32;        ///< k of the k-nearest candidate graph (sparse solver)
-  int dense_limit = 1000;              ///< larger sets (max of both sizes) use the sparse solver
-  int max_widening_rounds = 4;         ///< k doubles per round while no perfect matching exists
-  int max_pricing_rounds = 8;          ///< rounds adding certificate-violating pairs to the graph
-  double relative_tolerance = 1e-9;    ///< certificate tolerance, x the largest matched cost
+  int candidate_neighbors = 32;      ///< k of the k-nearest candidate graph (sparse solver)
+  int dense_limit = 1000;            ///< larger sets (max of both sizes) use the sparse solver
+  int max_widening_rounds = 4;       ///< k doubles per round while no perfect matching exists
+  int max_pricing_rounds = 8;        ///< rounds adding certificate-violating pairs to the graph
+  double relative_tolerance = 1e-9;  ///< certificate tolerance, x the largest matched cost
 };
 
 /// How a matching was obtained, and its proof.
@@ -45,8 +45,7 @@ struct PointMatching {
 /// sparse solver on a k-nearest graph, widened until Hopcroft-Karp finds a perfect matching,
 /// then priced out against the global certificate; the dense point solver is the last
 /// fallback, so the answer is always exact. Errors: a non-finite coordinate; bad settings.
-Expected<PointMatching> match_points(const std::vector<Vec3>& model,
-                                     const std::vector<Vec3>& scan,
+Expected<PointMatching> match_points(const std::vector<Vec3>& model, const std::vector<Vec3>& scan,
                                      const PointMatchingSettings& settings = {});
 
 /// The certificate of `assignment` (rows -> cols, squared distances) over ALL row/column

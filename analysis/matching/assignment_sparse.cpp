@@ -72,8 +72,7 @@ void row_reduction(const CandidateGraph& g, Assignment& a) {
 
 // Dijkstra from free row `start` over reduced costs; the same dual update and augmentation as
 // the dense solver, restricted to the explored part of the graph.
-bool augment_from(const CandidateGraph& g, std::int32_t start, Assignment& a,
-                  SparseWorkspace& w) {
+bool augment_from(const CandidateGraph& g, std::int32_t start, Assignment& a, SparseWorkspace& w) {
   w.visited_rows.clear();
   w.visited_cols.clear();
   w.touched.clear();
@@ -161,8 +160,8 @@ void warm_start(const CandidateGraph& g, Assignment& a) {
     const auto [lo, hi] = std::minmax_element(g.costs.begin(), g.costs.end());
     const double range = *hi - *lo;
     if (range > 0.0) {
-      auctioned = detail::epsilon_scaling_auction(g.rows, scan_row, range / 8.0, range * 1e-7,
-                                                  8.0, range, 64 * g.rows + 1024, a);
+      auctioned = detail::epsilon_scaling_auction(g.rows, scan_row, range / 8.0, range * 1e-7, 8.0,
+                                                  range, 64 * g.rows + 1024, a);
       if (auctioned) {
         detail::tighten_rows(g.rows, scan_row, a);
       } else {
@@ -224,9 +223,10 @@ Expected<Assignment> solve_sparse(const CandidateGraph& graph) {
   }
   // Feasibility first (Hopcroft-Karp): the auction would otherwise bid until its budget ends.
   if (const std::size_t matched = maximum_matching_size(graph); matched < graph.rows) {
-    return fail("sparse assignment: no row-saturating matching in the candidate graph (a maximum "
-                "matching places " + std::to_string(matched) + " of " +
-                std::to_string(graph.rows) + " rows)");
+    return fail(
+        "sparse assignment: no row-saturating matching in the candidate graph (a maximum "
+        "matching places " +
+        std::to_string(matched) + " of " + std::to_string(graph.rows) + " rows)");
   }
   // Dummy rows cost (n - m) n edges: only when that does not outgrow the graph itself.
   if (graph.rows > 0 && graph.rows < graph.cols &&

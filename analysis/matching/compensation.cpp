@@ -64,8 +64,8 @@ Expected<Compensation> compensation(const DeformationField& field,
   for (const auto& v : field.vectors) anchors.push_back(v.model);
 
   Compensation out;
-  out.smoothing_radius_mm = settings.smoothing_radius_mm > 0.0 ? settings.smoothing_radius_mm
-                                                               : median_spacing(anchors);
+  out.smoothing_radius_mm =
+      settings.smoothing_radius_mm > 0.0 ? settings.smoothing_radius_mm : median_spacing(anchors);
   const double sigma = out.smoothing_radius_mm;
   const KdTree tree(anchors);
   std::vector<Neighbor> near;
@@ -109,8 +109,7 @@ Expected<std::size_t> write_compensation_csv(const std::string& path, const Comp
   for (const auto& v : c.vectors) {
     std::fprintf(f.get(), "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%d\n", v.point.x(), v.point.y(),
                  v.point.z(), clean(v.vector.x()), clean(v.vector.y()), clean(v.vector.z()),
-                 v.vector.norm(),
-                 v.supported ? 1 : 0, v.clipped ? 1 : 0);
+                 v.vector.norm(), v.supported ? 1 : 0, v.clipped ? 1 : 0);
   }
   if (std::ferror(f.get())) return fail(path + ": write failed");
   return c.vectors.size();

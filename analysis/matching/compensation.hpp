@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/matching/deformation_field.hpp"
 #include "analysis/core/expected.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/matching/deformation_field.hpp"
 
 namespace springscan::analysis {
 

@@ -17,9 +17,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "analysis/matching/assignment_points.hpp"
 #include "analysis/core/expected.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/matching/assignment_points.hpp"
 
 namespace springscan::analysis {
 
@@ -38,8 +38,8 @@ struct DeformationFieldSettings {
 
 /// One vector of the field: model point -> scan point, CAD frame, mm.
 struct DeformationVector {
-  std::uint32_t model_index = 0;     ///< index into the reduced model
-  std::uint32_t scan_index = 0;      ///< index into the reduced scan
+  std::uint32_t model_index = 0;  ///< index into the reduced model
+  std::uint32_t scan_index = 0;   ///< index into the reduced scan
   Vec3 model = Vec3::Zero();
   Vec3 scan = Vec3::Zero();
   double squared_distance_mm2 = 0.0;

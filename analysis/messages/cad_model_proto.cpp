@@ -16,7 +16,8 @@ Vec3 get(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 void samples_to_proto(const PointCloud& cloud, v1::PointCloud* out) {
   out->mutable_xyz()->Reserve(static_cast<int>(3 * cloud.size()));
   for (const Vec3& p : cloud.points) out->add_xyz(p.x()), out->add_xyz(p.y()), out->add_xyz(p.z());
-  for (const Vec3& n : cloud.normals) out->add_normals(n.x()), out->add_normals(n.y()), out->add_normals(n.z());
+  for (const Vec3& n : cloud.normals)
+    out->add_normals(n.x()), out->add_normals(n.y()), out->add_normals(n.z());
   for (int id : cloud.face_ids) out->add_face_ids(id);
 }
 
@@ -81,7 +82,8 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
   model.face_count = message.face_count();
   const auto valid = [&](int id) { return id >= 0 && id < model.face_count; };
   for (int id : model.samples.face_ids)
-    if (!valid(id)) return fail("cached model: sample face id " + std::to_string(id) + " out of range");
+    if (!valid(id))
+      return fail("cached model: sample face id " + std::to_string(id) + " out of range");
   for (const auto& m : message.flanges()) {
     Flange f;
     f.id = m.id();
@@ -108,8 +110,7 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
   return model;
 }
 
-Expected<CadModelSettings> from_proto(const v1::ModelSettings& message,
-                                      CadModelSettings settings) {
+Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModelSettings settings) {
   if (message.has_sample_count()) {
     if (message.sample_count() < 100 || message.sample_count() > 10'000'000)
       return fail("settings: model.sample_count = " + std::to_string(message.sample_count()) +

@@ -3,8 +3,8 @@
 // *_proto.cpp files touch proto types).
 
 #include "analysis/deviation/deviation.hpp"
-#include "analysis/registration/global_fit.hpp"
 #include "analysis/preprocess/reduction.hpp"
+#include "analysis/registration/global_fit.hpp"
 #include "proto/springscan.pb.h"
 
 namespace springscan::analysis {

@@ -3,10 +3,10 @@
 // 2: only *_proto.cpp files convert). Settings start from the C++ defaults and take only the
 // fields the message sets; each value is validated here, once, naming the field.
 
-#include "analysis/matching/compensation.hpp"
-#include "analysis/matching/deformation_field.hpp"
 #include "analysis/core/expected.hpp"
 #include "analysis/inspection/verdict.hpp"
+#include "analysis/matching/compensation.hpp"
+#include "analysis/matching/deformation_field.hpp"
 #include "proto/springscan.pb.h"
 
 namespace springscan::analysis {

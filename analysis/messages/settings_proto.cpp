@@ -64,8 +64,8 @@ std::optional<Error> icp_from_proto(const v1::RegistrationSettings& m, IcpSettin
   if (m.has_robust_kernel() && !M::RobustKernel_IsValid(m.robust_kernel()))
     return bad("registration.robust_kernel", m.robust_kernel(), "NONE, HUBER or TUKEY");
   if (m.has_method() && m.method() != M::METHOD_UNSPECIFIED)
-    s.method = m.method() == M::POINT_TO_POINT ? IcpMethod::kPointToPoint
-                                               : IcpMethod::kPointToPlane;
+    s.method =
+        m.method() == M::POINT_TO_POINT ? IcpMethod::kPointToPoint : IcpMethod::kPointToPlane;
   if (m.has_robust_kernel() && m.robust_kernel() != M::KERNEL_UNSPECIFIED)
     s.kernel = m.robust_kernel() == M::HUBER   ? RobustKernel::kHuber
                : m.robust_kernel() == M::TUKEY ? RobustKernel::kTukey
@@ -77,8 +77,8 @@ std::optional<Error> icp_from_proto(const v1::RegistrationSettings& m, IcpSettin
   }
   if (m.has_max_correspondence_distance_mm()) {
     if (!in_range(m.max_correspondence_distance_mm(), 0.0, 1e9))
-      return bad("registration.max_correspondence_distance_mm",
-                 m.max_correspondence_distance_mm(), ">= 0; 0 = no limit");
+      return bad("registration.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
+                 ">= 0; 0 = no limit");
     s.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
   }
   if (m.has_trimmed_fraction()) {

@@ -5,11 +5,11 @@
 // (STYLE.md §4). One function per stage: other stages append theirs here or in their own
 // *_proto.cpp.
 
-#include "analysis/deviation/deviation.hpp"
 #include "analysis/core/expected.hpp"
-#include "analysis/registration/global_fit.hpp"
+#include "analysis/deviation/deviation.hpp"
 #include "analysis/preprocess/normals.hpp"
 #include "analysis/preprocess/reduction.hpp"
+#include "analysis/registration/global_fit.hpp"
 #include "analysis/springback/springback.hpp"
 #include "proto/springscan.pb.h"
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string>
 
-#include "analysis/preprocess/kcenter.hpp"
 #include "analysis/core/parallel.hpp"
+#include "analysis/preprocess/kcenter.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -62,8 +62,7 @@ Expected<CurvatureReduction> reduce_by_curvature(const PointCloud& cloud,
                 std::to_string(cloud.normals.size()) + " for " + std::to_string(cloud.size()));
   if (!all_finite(cloud.points)) return fail("curvature: input has non-finite coordinates");
   if (settings.radius_mm <= 0.0 && settings.k_neighbors < 3)
-    return fail("curvature: k_neighbors must be >= 3, got " +
-                std::to_string(settings.k_neighbors));
+    return fail("curvature: k_neighbors must be >= 3, got " + std::to_string(settings.k_neighbors));
   CurvatureReduction result;
   result.curvature = curvature_measure(KdTree(cloud.points), cloud.normals, settings);
   std::vector<char> keep(cloud.size(), 0);

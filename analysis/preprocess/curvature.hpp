@@ -17,9 +17,9 @@
 namespace springscan::analysis {
 
 struct CurvatureSettings {
-  int k_neighbors = 10;     ///< m, the neighbourhood size (the point itself excluded); paper: 10
-  double radius_mm = 0.0;   ///< > 0: every neighbour within this radius instead of k
-  double min_curvature = 0.015;  ///< minC: points with C < minC are removed (paper: 0.015)
+  int k_neighbors = 10;    ///< m, the neighbourhood size (the point itself excluded); paper: 10
+  double radius_mm = 0.0;  ///< > 0: every neighbour within this radius instead of k
+  double min_curvature = 0.015;         ///< minC: points with C < minC are removed (paper: 0.015)
   double base_kcenter_radius_mm = 0.0;  ///< > 0: also keep a k-center sample at this w, so
                                         ///< flat areas and boundaries keep points (paper §2)
   int threads = 0;                      ///< worker threads, 0 = all cores

@@ -55,10 +55,10 @@ std::optional<Error> check_input(const std::vector<Vec3>& points, const KCenterS
 // distance to the center set inside its subtree, so a new center descends only into nodes
 // whose box is closer than that farthest distance, and the next center is read at the root.
 struct Node {
-  Vec3 lo, hi;                    // bounding box
+  Vec3 lo, hi;                                              // bounding box
   double far_d2 = std::numeric_limits<double>::infinity();  // max distance^2 in the subtree
-  std::uint32_t far_index = 0;    // its original index (lowest on ties)
-  std::size_t begin = 0, end = 0; // leaf: range in the tree-ordered arrays
+  std::uint32_t far_index = 0;                              // its original index (lowest on ties)
+  std::size_t begin = 0, end = 0;      // leaf: range in the tree-ordered arrays
   std::int32_t left = -1, right = -1;  // children, -1 for a leaf
 };
 
@@ -93,7 +93,8 @@ std::int32_t build(PointTree& t, std::size_t begin, std::size_t end, std::size_t
                      t.entries.begin() + static_cast<std::ptrdiff_t>(mid),
                      t.entries.begin() + static_cast<std::ptrdiff_t>(end),
                      [axis](const Entry& a, const Entry& b) {
-                       return a.p[axis] < b.p[axis] || (a.p[axis] == b.p[axis] && a.index < b.index);
+                       return a.p[axis] < b.p[axis] ||
+                              (a.p[axis] == b.p[axis] && a.index < b.index);
                      });
     n.left = build(t, begin, mid, leaf);
     n.right = build(t, mid, end, leaf);

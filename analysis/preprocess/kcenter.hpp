@@ -22,10 +22,10 @@
 namespace springscan::analysis {
 
 struct KCenterSettings {
-  std::size_t center_count = 0;  ///< > 0: select this many centers (variant "k")
-  double radius_mm = 10.0;       ///< otherwise: stop when the farthest point is closer (paper: 10)
-  std::uint32_t start_index = 0; ///< the first center (the paper: "an arbitrary point")
-  std::size_t bucket_size = 128; ///< points per KD-tree leaf of the fast version
+  std::size_t center_count = 0;   ///< > 0: select this many centers (variant "k")
+  double radius_mm = 10.0;        ///< otherwise: stop when the farthest point is closer (paper: 10)
+  std::uint32_t start_index = 0;  ///< the first center (the paper: "an arbitrary point")
+  std::size_t bucket_size = 128;  ///< points per KD-tree leaf of the fast version
 };
 
 struct KCenterResult {

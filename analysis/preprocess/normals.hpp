@@ -12,18 +12,18 @@
 namespace springscan::analysis {
 
 struct NormalSettings {
-  int k_neighbors = 10;        ///< neighbourhood size (the point itself included); paper: 10
-  double radius_mm = 0.0;      ///< > 0: use every point within this radius instead of k
-  int min_neighbors = 3;       ///< fewer neighbours than this: no plane, normal left at zero
+  int k_neighbors = 10;             ///< neighbourhood size (the point itself included); paper: 10
+  double radius_mm = 0.0;           ///< > 0: use every point within this radius instead of k
+  int min_neighbors = 3;            ///< fewer neighbours than this: no plane, normal left at zero
   bool orient_to_viewpoint = true;  ///< flip each normal to face `viewpoint`
   Vec3 viewpoint = Vec3(0.0, 0.0, 1e6);  ///< mm; the default looks down from far above +z
-  int threads = 0;             ///< worker threads, 0 = all cores
+  int threads = 0;                       ///< worker threads, 0 = all cores
 };
 
 struct NormalResult {
-  std::vector<Vec3> normals;             ///< unit normals; zero where the plane was undefined
-  std::vector<double> surface_variation; ///< lambda_min / (sum of lambdas), 0 (plane) .. 1/3
-  std::size_t undefined = 0;             ///< points with too few neighbours (normal zero)
+  std::vector<Vec3> normals;              ///< unit normals; zero where the plane was undefined
+  std::vector<double> surface_variation;  ///< lambda_min / (sum of lambdas), 0 (plane) .. 1/3
+  std::size_t undefined = 0;              ///< points with too few neighbours (normal zero)
 };
 
 /// The least-squares plane normal of every point of `tree` (its own points). Thread-safe: the

@@ -25,7 +25,8 @@ PointCloud drop_sparse_voxels(const VoxelResult& voxels, double fill, std::size_
   std::vector<std::uint32_t> keep;
   keep.reserve(voxels.counts.size());
   for (std::size_t i = 0; i < voxels.counts.size(); ++i)
-    if (static_cast<double>(voxels.counts[i]) >= min_count) keep.push_back(static_cast<std::uint32_t>(i));
+    if (static_cast<double>(voxels.counts[i]) >= min_count)
+      keep.push_back(static_cast<std::uint32_t>(i));
   dropped = voxels.counts.size() - keep.size();
   return select(voxels.cloud, keep);
 }
@@ -47,7 +48,8 @@ Expected<ReductionOutcome> reduce(const PointCloud& scan, const PointCloud& mode
   if (scan.empty()) return fail("reduce: the scan is empty");
   if (model_samples.empty()) return fail("reduce: the model has no samples");
   if (!(settings.voxel_size_mm >= 0.0))
-    return fail("reduce: voxel_size_mm must be >= 0, got " + std::to_string(settings.voxel_size_mm));
+    return fail("reduce: voxel_size_mm must be >= 0, got " +
+                std::to_string(settings.voxel_size_mm));
   ReductionOutcome out;
   const auto [lo, hi] = bounding_box(scan.points);
   out.voxel_size_mm = settings.voxel_size_mm > 0.0
@@ -57,7 +59,8 @@ Expected<ReductionOutcome> reduce(const PointCloud& scan, const PointCloud& mode
   // Voxel centroids: one fit point per occupied cell, noise averaged, density evened out.
   auto voxels = voxel_reduce(scan, {out.voxel_size_mm});
   if (!voxels) return fail("reduce: scan " + voxels.message());
-  out.scan_for_fit = drop_sparse_voxels(*voxels, settings.min_voxel_fill, out.sparse_voxels_dropped);
+  out.scan_for_fit =
+      drop_sparse_voxels(*voxels, settings.min_voxel_fill, out.sparse_voxels_dropped);
   // Paper §2: k-center with the same threshold w on both sets gives similar distributions.
   auto model_kc = kcenter_reduce(model_samples.points, settings.kcenter);
   if (!model_kc) return fail("reduce: model " + model_kc.message());

@@ -25,7 +25,8 @@ CoarseModel coarse_model(const KdTree& tree, const std::vector<Vec3>& normals, d
   const double voxel = (hi - lo).norm() / divisions;
   if (!(voxel > 0.0)) return out;
   auto reduced = voxel_reduce(cloud, {voxel});
-  if (!reduced || reduced->cloud.size() < 100 || reduced->cloud.size() * 2 > tree.size()) return out;
+  if (!reduced || reduced->cloud.size() < 100 || reduced->cloud.size() * 2 > tree.size())
+    return out;
   out.normals = std::move(reduced->cloud.normals);
   out.tree = std::make_unique<KdTree>(std::move(reduced->cloud.points));
   return out;
@@ -38,8 +39,8 @@ constexpr std::size_t kDiagnosticSample = 4096;
 
 }  // namespace
 
-double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
-                            const KdTree& tree, double trimmed_fraction, int threads) {
+double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T, const KdTree& tree,
+                            double trimmed_fraction, int threads) {
   if (points.empty() || tree.empty()) return 0.0;
   std::vector<double> d2(points.size());
   parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
@@ -73,7 +74,8 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
     pca_settings.threads = threads;
     // The candidate search only has to tell poses apart: a coarse model makes its many short
     // ICP runs several times cheaper; the final ICP below uses the full model.
-    const CoarseModel coarse = coarse_model(model_tree, model_normals, settings.pca_model_divisions);
+    const CoarseModel coarse =
+        coarse_model(model_tree, model_normals, settings.pca_model_divisions);
     auto pca = coarse.tree ? pca_align(scan, *coarse.tree, coarse.normals, pca_settings)
                            : pca_align(scan, model_tree, model_normals, pca_settings);
     if (!pca) return fail("global fit: " + pca.message());
@@ -84,7 +86,8 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
     if (result.pca.ambiguity > 0.9) {
       std::ostringstream text;
       text << "global fit: the part looks nearly symmetric (best/next distinct PCA candidate "
-              "error ratio " << result.pca.ambiguity << "); the orientation may be ambiguous";
+              "error ratio "
+           << result.pca.ambiguity << "); the orientation may be ambiguous";
       result.warnings.push_back(text.str());
     }
   } else {

@@ -1,34 +1,35 @@
 #pragma once
 // Global registration (paper §3, DESIGN.md stage 4): PCA alignment with the axis ambiguity
-// resolved (analysis/registration/pca.hpp), then ICP to convergence (analysis/registration/icp.hpp).
+// resolved (analysis/registration/pca.hpp), then ICP to convergence
+// (analysis/registration/icp.hpp).
 
 #include <string>
 #include <vector>
 
 #include "analysis/core/expected.hpp"
-#include "analysis/registration/icp.hpp"
 #include "analysis/core/kdtree.hpp"
+#include "analysis/registration/icp.hpp"
 #include "analysis/registration/pca.hpp"
 
 namespace springscan::analysis {
 
 struct GlobalFitSettings {
-  bool pca_initial_alignment = true;  ///< false: ICP starts from the identity (pre-aligned data)
-  PcaAlignSettings pca;               ///< candidate search
-  double pca_model_divisions = 100.0; ///< candidates are scored on the model voxel-reduced to
-                                      ///< its box diagonal / this (0: the full model)
-  IcpSettings icp;                    ///< the final ICP
+  bool pca_initial_alignment = true;   ///< false: ICP starts from the identity (pre-aligned data)
+  PcaAlignSettings pca;                ///< candidate search
+  double pca_model_divisions = 100.0;  ///< candidates are scored on the model voxel-reduced to
+                                       ///< its box diagonal / this (0: the full model)
+  IcpSettings icp;                     ///< the final ICP
 };
 
 struct GlobalFitResult {
   Transform T_cad_scan = Transform::Identity();  ///< maps scan coordinates into the CAD frame
-  double rms_initial_mm = 0.0;    ///< rms nearest distance of the scan points as given, the
-                                  ///< farthest icp.trimmed_fraction left out (outliers); over
-                                  ///< an evenly strided sample of at most 4096 scan points
-  double rms_after_pca_mm = 0.0;  ///< the same after the pure PCA alignment (paper Figure 5)
-  double rms_final_mm = 0.0;      ///< the same after ICP
-  IcpResult icp;                  ///< history, iterations, inliers, converged, stop reason
-  PcaAlignResult pca;             ///< candidate scores (empty when PCA was off)
+  double rms_initial_mm = 0.0;        ///< rms nearest distance of the scan points as given, the
+                                      ///< farthest icp.trimmed_fraction left out (outliers); over
+                                      ///< an evenly strided sample of at most 4096 scan points
+  double rms_after_pca_mm = 0.0;      ///< the same after the pure PCA alignment (paper Figure 5)
+  double rms_final_mm = 0.0;          ///< the same after ICP
+  IcpResult icp;                      ///< history, iterations, inliers, converged, stop reason
+  PcaAlignResult pca;                 ///< candidate scores (empty when PCA was off)
   std::vector<std::string> warnings;  ///< e.g. a near-symmetric part, a degenerate surface
 };
 
@@ -40,7 +41,7 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
 
 /// Root mean square nearest distance of T * points to the tree, mm, over the closest
 /// (1 - trimmed_fraction) of the points (parallel, deterministic).
-double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
-                            const KdTree& tree, double trimmed_fraction = 0.0, int threads = 0);
+double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T, const KdTree& tree,
+                            double trimmed_fraction = 0.0, int threads = 0);
 
 }  // namespace springscan::analysis

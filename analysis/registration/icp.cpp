@@ -83,7 +83,8 @@ double trim_threshold(Pairs& pairs, double trimmed_fraction) {
   if (pairs.scratch.empty()) return 0.0;
   const auto m = pairs.scratch.size();
   const auto drop = static_cast<std::size_t>(std::floor(trimmed_fraction * static_cast<double>(m)));
-  const auto kth = pairs.scratch.begin() + static_cast<std::ptrdiff_t>(m - std::min(drop, m - 1) - 1);
+  const auto kth =
+      pairs.scratch.begin() + static_cast<std::ptrdiff_t>(m - std::min(drop, m - 1) - 1);
   std::nth_element(pairs.scratch.begin(), kth, pairs.scratch.end());
   return *kth;
 }
@@ -117,16 +118,16 @@ Partial accumulate(const std::vector<Vec3>& source, const Transform& T, const Ve
                    const KdTree& target, const std::vector<Vec3>& normals, const Pairs& pairs,
                    double threshold, const IcpSettings& s) {
   std::vector<Partial> partials(block_count(source.size()));
-  parallel_blocks(source.size(), s.threads, [&](std::size_t blk, std::size_t begin,
-                                                std::size_t end) {
-    Partial& p = partials[blk];
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::uint32_t j = pairs.target[i];
-      if (j == kNoPair || pairs.d2[i] > threshold) continue;
-      const Vec3* n = s.method == IcpMethod::kPointToPlane ? &normals[j] : nullptr;
-      add_pair(T * source[i], target.points()[j], n, c, s, p);
-    }
-  });
+  parallel_blocks(source.size(), s.threads,
+                  [&](std::size_t blk, std::size_t begin, std::size_t end) {
+                    Partial& p = partials[blk];
+                    for (std::size_t i = begin; i < end; ++i) {
+                      const std::uint32_t j = pairs.target[i];
+                      if (j == kNoPair || pairs.d2[i] > threshold) continue;
+                      const Vec3* n = s.method == IcpMethod::kPointToPlane ? &normals[j] : nullptr;
+                      add_pair(T * source[i], target.points()[j], n, c, s, p);
+                    }
+                  });
   Partial total;
   for (const auto& p : partials) total.add(p);  // fixed order: thread-count independent
   return total;
@@ -160,8 +161,10 @@ Transform solve_point_to_plane(const Partial& p, const Vec3& c, bool& degenerate
   Vec6 x = Vec6::Zero();
   const Vec6 rhs = eig.eigenvectors().transpose() * (-p.b);
   for (int k = 0; k < 6; ++k) {
-    if (lambda(k) > cutoff) x += eig.eigenvectors().col(k) * (rhs(k) / lambda(k));
-    else degenerate = true;
+    if (lambda(k) > cutoff)
+      x += eig.eigenvectors().col(k) * (rhs(k) / lambda(k));
+    else
+      degenerate = true;
   }
   const Vec3 omega = x.head<3>();
   const double angle = omega.norm();
@@ -197,8 +200,7 @@ std::optional<Error> validate(const IcpSettings& s) {
     return bad("max_correspondence_distance_mm", s.max_correspondence_distance_mm, "must be >= 0");
   if (!(s.trimmed_fraction >= 0.0 && s.trimmed_fraction < 1.0))
     return bad("trimmed_fraction", s.trimmed_fraction, "must be in [0, 1)");
-  if (!(s.kernel_scale_mm > 0.0))
-    return bad("kernel_scale_mm", s.kernel_scale_mm, "must be > 0");
+  if (!(s.kernel_scale_mm > 0.0)) return bad("kernel_scale_mm", s.kernel_scale_mm, "must be > 0");
   if (!(s.min_error_mm >= 0.0)) return bad("min_error_mm", s.min_error_mm, "must be >= 0");
   if (!(s.error_ratio_stop >= 0.0 && s.error_ratio_stop <= 1.0))
     return bad("error_ratio_stop", s.error_ratio_stop, "must be in [0, 1]");
@@ -232,8 +234,14 @@ Expected<IcpResult> icp(const std::vector<Vec3>& source, const KdTree& target,
     result.error_history.push_back(E);
     const double previous = i > 0 ? result.error_history[result.error_history.size() - 2] : 0.0;
     result.converged = true;
-    if (small_step) { result.stop_reason = "increment"; break; }
-    if (std::sqrt(E) <= s.min_error_mm) { result.stop_reason = "error"; break; }
+    if (small_step) {
+      result.stop_reason = "increment";
+      break;
+    }
+    if (std::sqrt(E) <= s.min_error_mm) {
+      result.stop_reason = "error";
+      break;
+    }
     // Paper Figure 6b: E(i)/E(i-1) near 1 means no further progress. A rise counts too: with
     // trimming, the kept set can flip between two near-equal states at the noise floor.
     if (i > 1 && previous > 0.0 && E / previous > s.error_ratio_stop) {
@@ -241,11 +249,17 @@ Expected<IcpResult> icp(const std::vector<Vec3>& source, const KdTree& target,
       break;
     }
     result.converged = false;
-    if (i >= s.max_iterations) { result.stop_reason = "iterations"; break; }
+    if (i >= s.max_iterations) {
+      result.stop_reason = "iterations";
+      break;
+    }
     const Transform step = s.method == IcpMethod::kPointToPlane
                                ? solve_point_to_plane(sums, c, result.degenerate)
                                : solve_point_to_point(sums, c);
-    if (!step.matrix().allFinite()) { result.stop_reason = "numerical failure"; break; }
+    if (!step.matrix().allFinite()) {
+      result.stop_reason = "numerical failure";
+      break;
+    }
     T = step * T;
     ++result.iterations;
     const double angle = Eigen::AngleAxisd(step.linear()).angle();

@@ -24,10 +24,10 @@ struct IcpSettings {
   int max_iterations = 50;                      ///< ICP updates at most
   double max_correspondence_distance_mm = 0.0;  ///< pairs farther apart are dropped; 0 = no limit
   double trimmed_fraction = 0.1;  ///< share of the farthest pairs left out each iteration, [0, 1)
-  RobustKernel kernel = RobustKernel::kHuber;   ///< weight of a pair by its residual
-  double kernel_scale_mm = 1.0;                 ///< Huber corner / Tukey cut-off, mm
-  double min_error_mm = 0.0;            ///< stop when the rms residual falls to this (converged)
-  double error_ratio_stop = 0.9999;  ///< stop when E(i)/E(i-1) > this, from i = 2 (converged)
+  RobustKernel kernel = RobustKernel::kHuber;  ///< weight of a pair by its residual
+  double kernel_scale_mm = 1.0;                ///< Huber corner / Tukey cut-off, mm
+  double min_error_mm = 0.0;               ///< stop when the rms residual falls to this (converged)
+  double error_ratio_stop = 0.9999;        ///< stop when E(i)/E(i-1) > this, from i = 2 (converged)
   double rotation_tolerance_rad = 1e-10;   ///< stop when an update rotates less than this ...
   double translation_tolerance_mm = 1e-9;  ///< ... and translates less than this (converged)
   int threads = 0;                         ///< worker threads, 0 = all cores

@@ -37,8 +37,8 @@ struct Refiner {
   const PcaAlignSettings& settings;
   IcpSettings icp_settings;
 
-  void run(const std::vector<Vec3>& sample, const std::vector<std::size_t>& which,
-           int iterations, std::vector<Transform>& poses, std::vector<double>& scores) {
+  void run(const std::vector<Vec3>& sample, const std::vector<std::size_t>& which, int iterations,
+           std::vector<Transform>& poses, std::vector<double>& scores) {
     IcpSettings s = icp_settings;
     s.max_iterations = iterations;
     parallel_tasks(which.size(), settings.threads, [&](std::size_t k) {
@@ -144,7 +144,8 @@ std::vector<Mat3> pca_rotation_candidates(const PrincipalFrame& source,
   do {
     for (int signs = 0; signs < 8; ++signs) {
       Mat3 P = Mat3::Zero();  // signed permutation: source axis order[k] -> target axis k
-      for (int k = 0; k < 3; ++k) P(k, order[static_cast<std::size_t>(k)]) = (signs >> k) & 1 ? -1.0 : 1.0;
+      for (int k = 0; k < 3; ++k)
+        P(k, order[static_cast<std::size_t>(k)]) = (signs >> k) & 1 ? -1.0 : 1.0;
       const Mat3 R = target.axes * P * source.axes.transpose();
       if (R.determinant() > 0.0) candidates.push_back(R);
     }
@@ -167,13 +168,13 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   if (!source_frame) return fail("scan " + source_frame.message());
   auto target_frame = principal_frame(target.points());
   if (!target_frame) return fail("model " + target_frame.message());
-  const auto rotations = pca_rotation_candidates(*source_frame, *target_frame, settings.in_plane_steps);
+  const auto rotations =
+      pca_rotation_candidates(*source_frame, *target_frame, settings.in_plane_steps);
   const std::vector<Vec3> sample = strided_sample(source, settings.sample_points);
   const std::vector<Vec3> screen_sample = strided_sample(source, settings.screen_sample_points);
   Refiner refiner{target, target_normals, settings, {}};
-  refiner.icp_settings.method = target_normals.size() == target.size()
-                                    ? IcpMethod::kPointToPlane
-                                    : IcpMethod::kPointToPoint;
+  refiner.icp_settings.method =
+      target_normals.size() == target.size() ? IcpMethod::kPointToPlane : IcpMethod::kPointToPoint;
   refiner.icp_settings.trimmed_fraction = settings.refine_trimmed_fraction;
   refiner.icp_settings.kernel = RobustKernel::kNone;
   refiner.icp_settings.error_ratio_stop = 1.0;  // a short fixed budget: run all iterations
@@ -181,8 +182,8 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   const auto target_box = extent_along(target.points(), target_frame->axes);
   std::vector<Transform> starts;
   for (const Mat3& R : rotations)
-    for (const Vec3& t : translation_hypotheses(sample, R, *source_frame, *target_frame,
-                                                target_box, settings.partial_slack_fraction)) {
+    for (const Vec3& t : translation_hypotheses(sample, R, *source_frame, *target_frame, target_box,
+                                                settings.partial_slack_fraction)) {
       Transform start = Transform::Identity();
       start.linear() = R;
       start.translation() = t;
@@ -197,8 +198,9 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   // they stopped, twice, on a larger sample (a partial scan, whose centroid is off the model's,
   // needs more than a few iterations to settle). Scores are compared within a round only.
   refiner.run(screen_sample, order, settings.screen_iterations, refined, result.candidate_scores);
-  for (const auto& [keep, iterations] : {std::pair{settings.survivors, settings.refine_iterations},
-                                         std::pair{settings.finalists, settings.finalist_iterations}}) {
+  for (const auto& [keep, iterations] :
+       {std::pair{settings.survivors, settings.refine_iterations},
+        std::pair{settings.finalists, settings.finalist_iterations}}) {
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
       return result.candidate_scores[a] < result.candidate_scores[b];
     });

@@ -13,16 +13,16 @@
 #include <vector>
 
 #include "analysis/core/expected.hpp"
-#include "analysis/registration/icp.hpp"
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/registration/icp.hpp"
 
 namespace springscan::analysis {
 
 struct PrincipalFrame {
   Vec3 centroid = Vec3::Zero();
-  Mat3 axes = Mat3::Identity();      ///< columns: unit principal axes, largest variance first
-  Vec3 eigenvalues = Vec3::Zero();   ///< variances along the axes, mm^2, descending
+  Mat3 axes = Mat3::Identity();     ///< columns: unit principal axes, largest variance first
+  Vec3 eigenvalues = Vec3::Zero();  ///< variances along the axes, mm^2, descending
 };
 
 /// Centroid and principal axes (Eigen's SelfAdjointEigenSolver on the covariance).
@@ -33,27 +33,27 @@ struct PcaAlignSettings {
   std::size_t screen_sample_points = 250;  ///< source points (evenly strided) of the first
                                            ///< round, which every start goes through
   int screen_iterations = 4;               ///< ICP updates per start in the first round
-  std::size_t sample_points = 500;   ///< source points (evenly strided) of the later rounds
-  int refine_iterations = 8;         ///< ICP updates per survivor
-  double refine_trimmed_fraction = 0.2;  ///< share of worst pairs left out while refining
-  double score_trimmed_fraction = 0.2;   ///< share of worst distances left out of the score
-  int in_plane_steps = 3;                ///< quarter turn subdivisions about the sheet normal
-  double partial_slack_fraction = 0.15;  ///< along a model axis where the rotated scan is
-                                         ///< shorter than the model by more than this share of
-                                         ///< the model's extent (a partial scan), the scan is
-                                         ///< also tried pushed against either end
-  std::size_t survivors = 16;            ///< best starts of the first round refined further
-  std::size_t finalists = 4;             ///< best candidates refined further, then rescored
-  int finalist_iterations = 30;          ///< ICP updates per finalist (partial scans start far)
-  int threads = 0;                   ///< candidates refined in parallel, 0 = all cores
+  std::size_t sample_points = 500;         ///< source points (evenly strided) of the later rounds
+  int refine_iterations = 8;               ///< ICP updates per survivor
+  double refine_trimmed_fraction = 0.2;    ///< share of worst pairs left out while refining
+  double score_trimmed_fraction = 0.2;     ///< share of worst distances left out of the score
+  int in_plane_steps = 3;                  ///< quarter turn subdivisions about the sheet normal
+  double partial_slack_fraction = 0.15;    ///< along a model axis where the rotated scan is
+                                           ///< shorter than the model by more than this share of
+                                           ///< the model's extent (a partial scan), the scan is
+                                           ///< also tried pushed against either end
+  std::size_t survivors = 16;              ///< best starts of the first round refined further
+  std::size_t finalists = 4;               ///< best candidates refined further, then rescored
+  int finalist_iterations = 30;            ///< ICP updates per finalist (partial scans start far)
+  int threads = 0;                         ///< candidates refined in parallel, 0 = all cores
 };
 
 struct PcaAlignResult {
   Transform T_target_source = Transform::Identity();  ///< best candidate after its short ICP
-  Transform T_pca = Transform::Identity();   ///< that candidate's pure PCA alignment
-  std::size_t best_candidate = 0;            ///< index into candidate_scores
-  std::vector<double> candidate_scores;      ///< trimmed mean squared distance, mm^2, of every
-                                             ///< start (rotation x translation) after its ICP
+  Transform T_pca = Transform::Identity();            ///< that candidate's pure PCA alignment
+  std::size_t best_candidate = 0;                     ///< index into candidate_scores
+  std::vector<double> candidate_scores;  ///< trimmed mean squared distance, mm^2, of every
+                                         ///< start (rotation x translation) after its ICP
   double ambiguity = 0.0;  ///< best score / second-best score: near 1 = the part looks symmetric
 };
 

@@ -6,8 +6,8 @@
 #include <numbers>
 #include <unordered_map>
 
-#include "analysis/core/parallel.hpp"
 #include "analysis/core/kdtree.hpp"
+#include "analysis/core/parallel.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -218,7 +218,6 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   m.pass = std::abs(m.springback_deg) <= tolerance_deg;
   return m;
 }
-
 
 double measured_bend_angle_deg(const Vec3& normal_a, const Vec3& normal_b, const Vec3& axis,
                                const Transform& T_model_a, const Transform& T_model_b) {

@@ -14,9 +14,9 @@
 #include <vector>
 
 #include "analysis/core/expected.hpp"
-#include "analysis/springback/local_fit.hpp"
 #include "analysis/core/part_model.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/springback/local_fit.hpp"
 #include "analysis/springback/relative_rotation.hpp"
 
 namespace springscan::analysis {

@@ -1,5 +1,7 @@
 // OpenCASCADE shapes of sheet profiles: the reference-side path of profile_path() in the x-z
 // plane extruded along +y (sheet_profile.hpp states the conventions).
+#include "simulators/parts/cad_profile.hpp"
+
 #include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
 #include <BRepBuilderAPI_MakeWire.hxx>
@@ -19,7 +21,6 @@
 #include <optional>
 
 #include "analysis/cad/internal.hpp"
-#include "simulators/parts/cad_profile.hpp"
 
 namespace springscan::parts {
 namespace {
@@ -37,9 +38,8 @@ TopoDS_Edge arc_edge(const ProfileElement& arc, double radius) {
   const auto on_arc = [&](double angle) {
     return Eigen::Vector2d(arc.center + radius * Eigen::Vector2d(std::cos(angle), std::sin(angle)));
   };
-  const Handle(Geom_TrimmedCurve) curve =
-      GC_MakeArcOfCircle(to_occt(on_arc(arc.start_angle_rad)), to_occt(on_arc(mid_angle)),
-                         to_occt(on_arc(end_angle)));
+  const Handle(Geom_TrimmedCurve) curve = GC_MakeArcOfCircle(
+      to_occt(on_arc(arc.start_angle_rad)), to_occt(on_arc(mid_angle)), to_occt(on_arc(end_angle)));
   return BRepBuilderAPI_MakeEdge(curve);
 }
 
@@ -160,7 +160,8 @@ Expected<bool> write_cad(const CadShape& shape, const std::string& path, const s
 
 Expected<bool> write_profile_cad(const ProfileSpec& spec, const std::string& path,
                                  const std::string& unit) {
-  if (!is_valid(spec)) return fail(path + ": invalid profile spec (sizes, lengths, radii or angles)");
+  if (!is_valid(spec))
+    return fail(path + ": invalid profile spec (sizes, lengths, radii or angles)");
   try {
     return write_shape(build_profile(spec), path, unit);
   } catch (const Standard_Failure& e) {

@@ -1,6 +1,6 @@
 #pragma once
-// Analytic parts from a ProfileSpec (simulators/parts/sheet_profile.hpp): the exact PartModel of the
-// nominal profile (samples, segmentation, exact distance) and simulated scans of the part as
+// Analytic parts from a ProfileSpec (simulators/parts/sheet_profile.hpp): the exact PartModel of
+// the nominal profile (samples, segmentation, exact distance) and simulated scans of the part as
 // produced, bent with a known springback per bend. Tests, benchmarks and the scanner simulator
 // build their ground truth with these two functions.
 //

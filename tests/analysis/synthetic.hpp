@@ -19,9 +19,11 @@ namespace springscan::analysis::testing {
 
 /// z(x, y) of a free-form patch with bumps at irregular places: no rotational symmetry.
 inline double bumpy_height(double x, double y, Eigen::Vector2d* gradient = nullptr) {
-  struct Bump { double x, y, h, s; };
-  static const Bump kBumps[] = {{30, 20, 8, 200}, {85, 50, 5, 150}, {70, 15, -4, 100},
-                                {15, 55, 3, 80}};
+  struct Bump {
+    double x, y, h, s;
+  };
+  static const Bump kBumps[] = {
+      {30, 20, 8, 200}, {85, 50, 5, 150}, {70, 15, -4, 100}, {15, 55, 3, 80}};
   double z = 0.03 * x + 0.0004 * x * y;
   Eigen::Vector2d g(0.03 + 0.0004 * y, 0.0004 * x);
   for (const auto& b : kBumps) {
@@ -116,14 +118,17 @@ inline void add_noise(std::vector<Vec3>& points, double sigma_mm, unsigned seed)
 inline void add_outliers(std::vector<Vec3>& points, double fraction, double margin_mm,
                          unsigned seed) {
   Vec3 lo = points[0], hi = points[0];
-  for (const auto& p : points) { lo = lo.cwiseMin(p); hi = hi.cwiseMax(p); }
+  for (const auto& p : points) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const auto stride = static_cast<std::size_t>(std::round(1.0 / fraction));
   for (std::size_t i = 0; i < points.size(); i += stride) {
     const Vec3 t(u(rng), u(rng), u(rng));
-    points[i] = (lo - Vec3::Constant(margin_mm)) +
-                t.cwiseProduct(hi - lo + Vec3::Constant(2 * margin_mm));
+    points[i] =
+        (lo - Vec3::Constant(margin_mm)) + t.cwiseProduct(hi - lo + Vec3::Constant(2 * margin_mm));
   }
 }
 

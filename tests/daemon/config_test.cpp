@@ -111,8 +111,7 @@ TEST_F(ConfigTest, PartCatalogueErrors) {
   EXPECT_NE(empty.message().find("part catalogue is empty"), std::string::npos);
   auto duplicate = parse(std::string(kMinimal) + kMinimal);
   ASSERT_FALSE(duplicate.ok());
-  EXPECT_NE(duplicate.message().find(":2:9: parts[1].part_id: 3 appears twice"),
-            std::string::npos)
+  EXPECT_NE(duplicate.message().find(":2:9: parts[1].part_id: 3 appears twice"), std::string::npos)
       << duplicate.message();
   auto missing = parse("parts { part_id: 4 cad_file: \"nope.step\" }\n");
   ASSERT_FALSE(missing.ok());
@@ -124,20 +123,25 @@ TEST_F(ConfigTest, PartCatalogueErrors) {
 }
 
 TEST_F(ConfigTest, OtherRangeErrors) {
-  EXPECT_NE(parse(std::string(kMinimal) + "log_level: \"loud\"").message().find(
-                "log_level: 'loud' is not one of"),
+  EXPECT_NE(parse(std::string(kMinimal) + "log_level: \"loud\"")
+                .message()
+                .find("log_level: 'loud' is not one of"),
             std::string::npos);
-  EXPECT_NE(parse(std::string(kMinimal) + "modbus { unit_id: 0 }").message().find(
-                "modbus.unit_id: 0 is not in 1..247"),
+  EXPECT_NE(parse(std::string(kMinimal) + "modbus { unit_id: 0 }")
+                .message()
+                .find("modbus.unit_id: 0 is not in 1..247"),
             std::string::npos);
-  EXPECT_NE(parse(std::string(kMinimal) + "modbus { max_connections: 500 }").message().find(
-                "modbus.max_connections: 500"),
+  EXPECT_NE(parse(std::string(kMinimal) + "modbus { max_connections: 500 }")
+                .message()
+                .find("modbus.max_connections: 500"),
             std::string::npos);
-  EXPECT_NE(parse(std::string(kMinimal) + "report_retention: 0").message().find(
-                "report_retention: 0 is not in"),
+  EXPECT_NE(parse(std::string(kMinimal) + "report_retention: 0")
+                .message()
+                .find("report_retention: 0 is not in"),
             std::string::npos);
-  EXPECT_NE(parse(std::string(kMinimal) + "scanner { vendor_id: 70000 }").message().find(
-                "scanner.vendor_id: 70000"),
+  EXPECT_NE(parse(std::string(kMinimal) + "scanner { vendor_id: 70000 }")
+                .message()
+                .find("scanner.vendor_id: 70000"),
             std::string::npos);
 }
 

@@ -16,8 +16,8 @@
 #include <chrono>
 #include <mutex>
 #include <stdexcept>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 extern char** environ;
@@ -105,8 +105,9 @@ class DaemonProcess {
 
  private:
   void wait_ready(double timeout_s) {
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<
-        std::chrono::steady_clock::duration>(std::chrono::duration<double>(timeout_s));
+    const auto deadline = std::chrono::steady_clock::now() +
+                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(timeout_s));
     while (std::chrono::steady_clock::now() < deadline) {
       timeval tv{0, 200000};
       setsockopt(notify_fd_, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);

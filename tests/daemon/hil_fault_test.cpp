@@ -67,8 +67,9 @@ TEST_F(HilTest, TriggerWhileBusyIsRejectedAndTheRunningCycleStillEndsOnce) {
   const auto start = std::chrono::steady_clock::now();
   auto first = client->trigger(7, 1);
   ASSERT_TRUE(first.ok() && first->accepted);
-  ASSERT_TRUE(client->wait_for([](const auto& s) { return !s.bit(regs::kDiTriggerAck); },
-                               "TRIG_ACK = 0").ok());
+  ASSERT_TRUE(
+      client->wait_for([](const auto& s) { return !s.bit(regs::kDiTriggerAck); }, "TRIG_ACK = 0")
+          .ok());
   auto status = client->read_status();
   ASSERT_TRUE(status.ok());
   ASSERT_TRUE(status->bit(regs::kDiBusy)) << "the 1 s scan ended before the second trigger";
@@ -99,8 +100,8 @@ TEST_F(HilTest, PlcReconnectingMidHandshakeLosesAndDuplicatesNoResult) {
   }  // the PLC's connection drops while the station is busy
   {
     auto client = plc(daemon->port());  // it comes back and waits for the result
-    auto valid = client->wait_for([](const auto& s) { return s.bit(regs::kDiResultValid); },
-                                  "RESULT_VALID");
+    auto valid =
+        client->wait_for([](const auto& s) { return s.bit(regs::kDiResultValid); }, "RESULT_VALID");
     ASSERT_TRUE(valid.ok()) << valid.message();
     auto read = client->read_result();
     ASSERT_TRUE(read.ok());
@@ -137,9 +138,14 @@ TEST_F(HilTest, KillDuringAnalysisLeavesNoHalfReportAndHonestRegistersAfterResta
     ASSERT_EQ(stored->result.seq, 1);
     auto triggered = client->trigger(11, 1);
     ASSERT_TRUE(triggered.ok() && triggered->accepted);
-    ASSERT_TRUE(client->wait_for([](const auto& s) {
-                  return state_is(s, regs::State::kAnalyzing) || s.bit(regs::kDiResultValid);
-                }, "ANALYZING").ok());
+    ASSERT_TRUE(client
+                    ->wait_for(
+                        [](const auto& s) {
+                          return state_is(s, regs::State::kAnalyzing) ||
+                                 s.bit(regs::kDiResultValid);
+                        },
+                        "ANALYZING")
+                    .ok());
     EXPECT_EQ(WTERMSIG(daemon->stop(SIGKILL)), SIGKILL);
   }
   // Every record is complete; a kill before the rename leaves only a hidden temporary.
@@ -180,9 +186,14 @@ TEST_F(HilTest, SigtermWhileTheScanWaitsOnASilentDeviceStopsPromptly) {
   wait_online(*client);
   auto triggered = client->trigger(1, 1);
   ASSERT_TRUE(triggered.ok() && triggered->accepted);
-  ASSERT_TRUE(client->wait_for([](const auto& s) {
-                return state_is(s, regs::State::kAcquiring) && s.live[regs::kIrScanProgress] >= 30;
-              }, "the scan to stall at 30 %").ok());
+  ASSERT_TRUE(client
+                  ->wait_for(
+                      [](const auto& s) {
+                        return state_is(s, regs::State::kAcquiring) &&
+                               s.live[regs::kIrScanProgress] >= 30;
+                      },
+                      "the scan to stall at 30 %")
+                  .ok());
   // stop() escalates to SIGKILL after 10 s (as systemd after TimeoutStopSec); a clean exit
   // status 0 means the daemon cancelled the scan and shut down by itself.
   const int status = daemon->stop(SIGTERM);

@@ -21,10 +21,10 @@
 #include <string>
 #include <vector>
 
-#include "simulators/parts/sheet_part.hpp"
 #include "daemon/register_map.hpp"
 #include "daemon_process.hpp"
 #include "proto/springscan.pb.h"
+#include "simulators/parts/sheet_part.hpp"
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
 #include "test_rig.hpp"
@@ -101,8 +101,7 @@ class HilTest : public ::testing::Test {
     return std::make_unique<DaemonProcess>(
         SPRINGSCAND_EXE, config_path(), dir_.str(),
         std::vector<std::string>{"LD_PRELOAD=" + simulators::umockdev_preload_library(),
-                                 "UMOCKDEV_DIR=" + emulator_->root_dir(),
-                                 "ASAN_OPTIONS=" + asan});
+                                 "UMOCKDEV_DIR=" + emulator_->root_dir(), "ASAN_OPTIONS=" + asan});
   }
 
   static std::unique_ptr<simulators::PlcClient> plc(int port) {
@@ -115,9 +114,10 @@ class HilTest : public ::testing::Test {
     return std::move(*client);
   }
   static void wait_online(simulators::PlcClient& plc, bool online = true) {
-    ASSERT_TRUE(plc.wait_for([online](const auto& s) {
-                     return s.bit(regs::kDiScannerOnline) == online;
-                   }, online ? "SCANNER_ONLINE = 1" : "SCANNER_ONLINE = 0").ok());
+    ASSERT_TRUE(
+        plc.wait_for([online](const auto& s) { return s.bit(regs::kDiScannerOnline) == online; },
+                     online ? "SCANNER_ONLINE = 1" : "SCANNER_ONLINE = 0")
+            .ok());
   }
 
   /// The stored report of record `record` (RESULT_SEQ == record here).
@@ -200,9 +200,11 @@ class HilTest : public ::testing::Test {
     ASSERT_EQ(read.springback_mdeg.size(), static_cast<std::size_t>(r.bends_size()));
     for (int j = 0; j < r.bends_size(); ++j) {
       EXPECT_NEAR(read.springback_mdeg[static_cast<std::size_t>(j)],
-                  r.bends(j).springback_deg() * 1000.0, 1.0) << "bend record " << j;
+                  r.bends(j).springback_deg() * 1000.0, 1.0)
+          << "bend record " << j;
       EXPECT_EQ((read.bend_flags[static_cast<std::size_t>(j)] & regs::kBendPass) != 0,
-                r.bends(j).pass()) << "bend record " << j;
+                r.bends(j).pass())
+          << "bend record " << j;
     }
   }
 

@@ -26,16 +26,17 @@ std::pair<int, std::string> mbpoll(int port, const std::string& options,
 
 /// mbpoll writes `values` from `first` in table `type` (0 coils, 4 holding registers).
 void mbpoll_write(int port, int type, int first, const std::string& values) {
-  const auto [status, output] = mbpoll(port, "-t " + std::to_string(type) + " -r " +
-                                                 std::to_string(first), values);
+  const auto [status, output] =
+      mbpoll(port, "-t " + std::to_string(type) + " -r " + std::to_string(first), values);
   ASSERT_EQ(status, 0) << output;
 }
 
 /// mbpoll polls the discrete inputs until `bit` reads `value`, writing PLC_HEARTBEAT each
 /// time as a PLC does (the daemon watches it). False after `timeout_s`.
 bool mbpoll_wait_bit(int port, int bit, bool value, int& heartbeat, double timeout_s = 180.0) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration_cast<
-      std::chrono::steady_clock::duration>(std::chrono::duration<double>(timeout_s));
+  const auto deadline = std::chrono::steady_clock::now() +
+                        std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(timeout_s));
   while (std::chrono::steady_clock::now() < deadline) {
     mbpoll(port, "-t 4 -r 3", std::to_string(++heartbeat));
     const auto [status, output] = mbpoll(port, "-t 1 -r 0 -c 10");
@@ -74,7 +75,7 @@ TEST_F(HilTest, GoodPartPassesWithItsSpringbackAndMbpollRunsTheHandshake) {
   // A third-party client runs the next handshake: Debian's mbpoll, one request per call.
   const int port = daemon->port();
   int heartbeat = 1000;
-  mbpoll_write(port, 4, regs::kHrJobId, "22 1");      // JOB_ID 22, PART_ID 1 (FC16)
+  mbpoll_write(port, 4, regs::kHrJobId, "22 1");           // JOB_ID 22, PART_ID 1 (FC16)
   mbpoll_write(port, 0, regs::kCoilTriggerEnable, "1 1");  // TRIGGER_ENABLE, TRIGGER (FC15)
   ASSERT_TRUE(mbpoll_wait_bit(port, regs::kDiTriggerAck, true, heartbeat));
   mbpoll_write(port, 0, regs::kCoilTrigger, "0");  // TRIGGER drops (FC05)
@@ -188,15 +189,15 @@ TEST_F(HilTest, MalformedFramesAndAForeignClientLeaveTheStationServing) {
     auto reply = raw.receive();
     ASSERT_EQ(reply.size(), 9u);
     EXPECT_EQ(reply[7], 0x84);
-    EXPECT_EQ(reply[8], 3);                       // ILLEGAL DATA VALUE
+    EXPECT_EQ(reply[8], 3);                                 // ILLEGAL DATA VALUE
     raw.send_bytes(adu({6, 0, regs::kIrResultSeq, 0, 1}));  // write a read-only mirror
     reply = raw.receive();
     ASSERT_EQ(reply.size(), 9u);
-    EXPECT_EQ(reply[8], 2);                       // ILLEGAL DATA ADDRESS
+    EXPECT_EQ(reply[8], 2);                                        // ILLEGAL DATA ADDRESS
     raw.send_bytes(adu({0x17, 0, 1, 0, 1, 0, 1, 0, 1, 2, 0, 7}));  // FC23 (libmodbus #614)
     reply = raw.receive();
     ASSERT_EQ(reply.size(), 9u);
-    EXPECT_EQ(reply[8], 1);                       // ILLEGAL FUNCTION
+    EXPECT_EQ(reply[8], 1);  // ILLEGAL FUNCTION
     raw.send_bytes(adu({4, 0, 0, 0, 1}));
     EXPECT_EQ(raw.receive().size(), 11u);
   }

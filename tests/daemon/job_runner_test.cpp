@@ -19,12 +19,13 @@ class RunnerTest : public ::testing::Test {
       : dir_("springscan-runner"),
         store_(std::move(ReportStore::open({dir_.str(), 100}).value())),
         log_(LogLevel::kError, nullptr, false),
-        runner_(scanner_,
-                [this](std::uint16_t part, const analysis::PointCloud& scan) {
-                  last_part_ = part;
-                  return testing::plane_analysis(scan, 0.1);
-                },
-                store_, log_, RunnerSettings{"test-station", 0.05}) {}
+        runner_(
+            scanner_,
+            [this](std::uint16_t part, const analysis::PointCloud& scan) {
+              last_part_ = part;
+              return testing::plane_analysis(scan, 0.1);
+            },
+            store_, log_, RunnerSettings{"test-station", 0.05}) {}
 
   /// Starts a job and waits (poll on wake_fd) until it finished; returns the kFinished event.
   RunnerEvent run_job(std::uint64_t record, std::uint16_t part) {

@@ -1,10 +1,11 @@
+#include "daemon/register_map.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
 #include "daemon/register_image.hpp"
-#include "daemon/register_map.hpp"
 #include "daemon/result_block.hpp"
 
 namespace springscan::daemon {

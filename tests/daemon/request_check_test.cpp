@@ -13,8 +13,13 @@ namespace {
 /// An ADU: MBAP (tid 0x1234, protocol 0, length, unit) + PDU.
 std::vector<std::uint8_t> adu(std::vector<std::uint8_t> pdu, std::uint8_t unit = 1) {
   const std::size_t length = pdu.size() + 1;
-  std::vector<std::uint8_t> out = {0x12, 0x34, 0, 0, static_cast<std::uint8_t>(length >> 8),
-                                   static_cast<std::uint8_t>(length & 0xFF), unit};
+  std::vector<std::uint8_t> out = {0x12,
+                                   0x34,
+                                   0,
+                                   0,
+                                   static_cast<std::uint8_t>(length >> 8),
+                                   static_cast<std::uint8_t>(length & 0xFF),
+                                   unit};
   for (const std::uint8_t byte : pdu) out.push_back(byte);  // (insert trips GCC 12 -Warray-bounds)
   return out;
 }

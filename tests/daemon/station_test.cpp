@@ -35,7 +35,8 @@ class RunningStation {
         [](std::uint16_t, const analysis::PointCloud& scan) {
           return testing::plane_analysis(scan, 0.1);
         },
-        log_, [this](const std::string& message) {
+        log_,
+        [this](const std::string& message) {
           std::lock_guard lock(mutex_);
           notes_.push_back(message);
         });
@@ -79,8 +80,9 @@ class StationTest : public ::testing::Test {
   std::string reports() const { return dir_.str() + "/reports"; }
   /// Waits until the station sees the scanner (the runner probes it on its own thread).
   static void wait_online(PlcClient& plc) {
-    ASSERT_TRUE(plc.wait_for([](const auto& s) { return s.bit(regs::kDiScannerOnline); },
-                             "SCANNER_ONLINE").ok());
+    ASSERT_TRUE(
+        plc.wait_for([](const auto& s) { return s.bit(regs::kDiScannerOnline); }, "SCANNER_ONLINE")
+            .ok());
   }
   TempDir dir_;
   PlaneScanner scanner_;

@@ -4,6 +4,8 @@
 // against the plane z = 0. The tests know the ground truth (the offset) and check the numbers
 // that come out of the registers and the reports.
 
+#include <unistd.h>
+
 #include <atomic>
 #include <cmath>
 #include <condition_variable>
@@ -11,8 +13,6 @@
 #include <mutex>
 #include <random>
 #include <string>
-
-#include <unistd.h>
 
 #include "analysis/inspection/pipeline.hpp"
 #include "drivers/scanner.hpp"
@@ -119,8 +119,7 @@ inline analysis::Expected<analysis::InspectionOutcome> plane_analysis(
 class TempDir {
  public:
   explicit TempDir(const std::string& name)
-      : path_(std::filesystem::temp_directory_path() /
-              (name + "-" + std::to_string(::getpid()))) {
+      : path_(std::filesystem::temp_directory_path() / (name + "-" + std::to_string(::getpid()))) {
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }

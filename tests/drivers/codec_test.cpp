@@ -170,7 +170,8 @@ TEST(FrameCodec, RejectsOversizedLengthWithoutWaitingForIt) {
   ASSERT_EQ(decoder.next(f), DecodeStatus::kFrame);
   EXPECT_EQ(f.header.type, p::MessageType::kEndOfScan);
   // The largest legal frame passes; one more byte of length does not.
-  const Bytes max = encode_frame(p::MessageType::kLaserProfile, 3, payload_of(p::kMaxPayloadBytes, 3));
+  const Bytes max =
+      encode_frame(p::MessageType::kLaserProfile, 3, payload_of(p::kMaxPayloadBytes, 3));
   EXPECT_EQ(max.size(), p::kMaxFrameBytes);
   FrameDecoder d2;
   d2.feed(max);
@@ -196,7 +197,7 @@ TEST(SequenceChecker, DetectsGapsRepeatsAndWraps) {
   SequenceChecker c;
   EXPECT_EQ(c.check(0xFFFFFFFEu), SequenceChecker::Result::kOk);  // the first sets the start
   EXPECT_EQ(c.check(0xFFFFFFFFu), SequenceChecker::Result::kOk);
-  EXPECT_EQ(c.check(0u), SequenceChecker::Result::kOk);            // wraps modulo 2^32
+  EXPECT_EQ(c.check(0u), SequenceChecker::Result::kOk);  // wraps modulo 2^32
   EXPECT_EQ(c.check(3u), SequenceChecker::Result::kGap);
   EXPECT_EQ(c.last_gap(), 2u);
   EXPECT_EQ(c.check(4u), SequenceChecker::Result::kOk);

@@ -6,18 +6,18 @@
 #include <cmath>
 #include <memory>
 
-#include "simulators/parts/sheet_part.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/tactile_scanner.hpp"
+#include "simulators/parts/sheet_part.hpp"
 #include "simulators/usb_emulator.hpp"
 
 namespace springscan {
 namespace {
 
 using analysis::PointCloud;
-using parts::ProfileSpec;
 using drivers::LaserLineScanner;
 using drivers::TactileProbeScanner;
+using parts::ProfileSpec;
 using simulators::EmulatedUsbScanner;
 
 constexpr double kSigmaMm = 0.02;

@@ -45,14 +45,15 @@ TEST(ScannerSimProcess, CliLaserScanThroughTheEmulatedDeviceMatchesThePart) {
 
 TEST(ScannerSimProcess, UnplugReachesTheCliAsAFailureAndTheDeviceComesBack) {
   const std::string out = ::testing::TempDir() + "sim_process_tactile.ply";
-  const std::string cli = std::string(SPRINGSCAN_CLI_EXE) +
-                          " scan --quiet --kind tactile --serial SN-HIL --out " + out;
+  const std::string cli =
+      std::string(SPRINGSCAN_CLI_EXE) + " scan --quiet --kind tactile --serial SN-HIL --out " + out;
   // First scan: unplugged half way (exit 1); the simulator plugs the device back after 0.2 s;
   // second scan, a new process, finds it again.
   const std::string script = "sh -c '" + cli + "; test $? -eq 1 || exit 9; sleep 0.6; " + cli + "'";
   EXPECT_EQ(run(std::string(SPRINGSCAN_SIM_EXE) +
                 " --serial SN-HIL --kind tactile --duration 0.4 --unplug-at 0.5 "
-                "--replug-after 0.2 -- " + script),
+                "--replug-after 0.2 -- " +
+                script),
             0);
   EXPECT_TRUE(analysis::read_point_cloud(out).ok());
 }

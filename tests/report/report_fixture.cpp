@@ -11,8 +11,8 @@ namespace springscan::report::testing {
 using namespace springscan::parts;  // test and demo parts (simulators/parts)
 namespace {
 
-using parts::ProfileElement;
 using analysis::Vec3;
+using parts::ProfileElement;
 
 constexpr double kWidthMm = 80.0;
 

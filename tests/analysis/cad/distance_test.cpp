@@ -6,9 +6,9 @@
 #include <numbers>
 #include <random>
 
-#include "simulators/parts/cad_profile.hpp"
 #include "analysis/cad/sampling.hpp"
 #include "analysis/core/kdtree.hpp"
+#include "simulators/parts/cad_profile.hpp"
 #include "tests/analysis/cad_test_util.hpp"
 
 namespace springscan::analysis {
@@ -92,8 +92,7 @@ TEST_P(CadDistanceOnProfile, EndFaceAndCorner) {
   EXPECT_NEAR((corner.foot - Vec3(0, 30, 0)).norm(), 0.0, 1e-6);
 }
 
-INSTANTIATE_TEST_SUITE_P(Formats, CadDistanceOnProfile,
-                         ::testing::Values("built", "step", "igs"));
+INSTANTIATE_TEST_SUITE_P(Formats, CadDistanceOnProfile, ::testing::Values("built", "step", "igs"));
 
 // Oracle on a real part with fillets and holes: the exact distance is never larger than the
 // distance to any point of the surface (dense samples lie exactly on it), and not much smaller

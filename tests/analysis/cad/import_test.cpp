@@ -15,9 +15,7 @@ namespace {
 using testing::shared_cad;
 using testing::TempDir;
 
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream(path) << text;
-}
+void write_text(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
 
 TEST(CadImport, ErrorsNameTheFileAndWhatFailed) {
   TempDir dir;
@@ -82,7 +80,8 @@ INSTANTIATE_TEST_SUITE_P(
                       RealFile{"steel-sheets-2000mm.step", 62, 3875891.118, {840, 2000, 25}}),
     [](const auto& param_info) {
       std::string name = param_info.param.name;
-      for (auto& c : name) if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      for (auto& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
       return name;
     });
 

@@ -5,8 +5,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "simulators/parts/cad_profile.hpp"
 #include "analysis/io/sha256.hpp"
+#include "simulators/parts/cad_profile.hpp"
 #include "tests/analysis/cad_test_util.hpp"
 
 namespace springscan::analysis {

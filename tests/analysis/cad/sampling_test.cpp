@@ -62,8 +62,8 @@ TEST(CadSampling, SamplesLieOnTheSurfaceWithExactNormals) {
     worst_normal = std::max(worst_normal, 1.0 - std::abs(along));
     left += along > 0 ? 1 : 0;
   }
-  EXPECT_LT(worst, 1e-9);         // exactly on the surface, not on the chords
-  EXPECT_LT(worst_normal, 1e-12); // the surface normal, not the triangle's
+  EXPECT_LT(worst, 1e-9);          // exactly on the surface, not on the chords
+  EXPECT_LT(worst_normal, 1e-12);  // the surface normal, not the triangle's
   // One consistently oriented shell: every normal on the same side of the sheet.
   EXPECT_TRUE(left == 0 || left == static_cast<int>(cloud->size())) << left;
 }

@@ -20,10 +20,9 @@ void print(const std::string& name, const PartSegmentation& s) {
   std::cout << "[ segmentation ] " << name << ": " << s.flanges.size() << " flanges, "
             << s.bends.size() << " bends, " << s.other_faces.size() << " other faces\n";
   for (const auto& b : s.bends)
-    std::cout << "  bend " << b.id << ": flanges " << b.flange_a << "-" << b.flange_b
-              << ", angle " << b.nominal_angle_deg << " deg, inner radius " << b.radius_mm
-              << " mm, axis (" << b.axis_point.transpose() << ") + t (" << b.axis_direction.transpose()
-              << ")\n";
+    std::cout << "  bend " << b.id << ": flanges " << b.flange_a << "-" << b.flange_b << ", angle "
+              << b.nominal_angle_deg << " deg, inner radius " << b.radius_mm << " mm, axis ("
+              << b.axis_point.transpose() << ") + t (" << b.axis_direction.transpose() << ")\n";
 }
 
 // The path line a flange lies on: the reference side, or the offset side of a solid.
@@ -53,8 +52,7 @@ ProfileSpec thick(ProfileSpec spec) {
   return spec;
 }
 
-class CadSegmentationProfiles
-    : public ::testing::TestWithParam<std::tuple<Case, const char*>> {};
+class CadSegmentationProfiles : public ::testing::TestWithParam<std::tuple<Case, const char*>> {};
 
 // Bends found with the ProfileSpec's axes, radii and angles; each joins the flanges on either
 // side of its arc.
@@ -91,7 +89,8 @@ TEST_P(CadSegmentationProfiles, BendsMatchTheSpec) {
     const double t = c.spec.thickness_mm;
     const double inner = e.sweep_rad > 0 || t == 0 ? e.radius_mm : e.radius_mm - t;
     EXPECT_NEAR(match->radius_mm, inner, 1e-6);
-    EXPECT_NEAR(match->nominal_angle_deg, std::abs(c.spec.bend_angles_deg[static_cast<std::size_t>(e.bend_index)]), 1e-6);
+    EXPECT_NEAR(match->nominal_angle_deg,
+                std::abs(c.spec.bend_angles_deg[static_cast<std::size_t>(e.bend_index)]), 1e-6);
     const int la = line_of_flange[static_cast<std::size_t>(match->flange_a)];
     const int lb = line_of_flange[static_cast<std::size_t>(match->flange_b)];
     EXPECT_EQ(std::min(la, lb), e.bend_index);

@@ -30,12 +30,14 @@ TEST(Deviation, SignedByTheSampleNormalWithStatistics) {
   const KdTree tree(model.samples.points);
   // 100 points: 0.01 .. 1.00 mm above, except every 10th below.
   std::vector<Vec3> scan;
-  for (int i = 1; i <= 100; ++i) scan.emplace_back(10.3 + i * 0.5, 20.7, (i % 10 ? 1 : -1) * 0.01 * i);
+  for (int i = 1; i <= 100; ++i)
+    scan.emplace_back(10.3 + i * 0.5, 20.7, (i % 10 ? 1 : -1) * 0.01 * i);
   auto r = signed_deviation(scan, model, tree, {0.5, 0.0, 0});
   ASSERT_TRUE(r) << r.message();
   EXPECT_FALSE(r->exact);
   for (int i = 1; i <= 100; ++i)
-    EXPECT_NEAR(r->signed_distance_mm[static_cast<std::size_t>(i - 1)], (i % 10 ? 1 : -1) * 0.01 * i, 1e-12);
+    EXPECT_NEAR(r->signed_distance_mm[static_cast<std::size_t>(i - 1)],
+                (i % 10 ? 1 : -1) * 0.01 * i, 1e-12);
   const auto& s = r->statistics;
   EXPECT_NEAR(s.max_mm, 0.99, 1e-12);
   EXPECT_NEAR(s.min_mm, -1.0, 1e-12);

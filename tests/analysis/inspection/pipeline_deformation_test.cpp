@@ -2,8 +2,8 @@
 // (stages 8-9, issue 6).
 #include <gtest/gtest.h>
 
-#include "analysis/inspection/pipeline.hpp"
 #include "analysis/cad/point_model.hpp"
+#include "analysis/inspection/pipeline.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace springscan::analysis {

@@ -123,7 +123,8 @@ TEST(Pipeline, FlatScanRunsWithAWarning) {
   auto r = run_inspection(model, scan);
   ASSERT_TRUE(r) << r.message();
   bool warned = false;
-  for (const auto& w : r->report.warnings()) warned |= w.find("does not constrain") != std::string::npos;
+  for (const auto& w : r->report.warnings())
+    warned |= w.find("does not constrain") != std::string::npos;
   EXPECT_TRUE(warned) << r->report.DebugString();
   EXPECT_NEAR(r->report.deviation().max(), 0.0, 1e-6);  // the constrained offset is removed
 }

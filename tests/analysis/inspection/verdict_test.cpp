@@ -61,8 +61,9 @@ TEST(Verdict, SurfaceDeviationByP95OrMax) {
   v = decide_verdict(r, {.deviation_statistic = DeviationStatistic::kMax});
   EXPECT_FALSE(v.pass());
   EXPECT_TRUE(has_reason(v, "max |deviation| 0.61 mm > tolerance 0.50 mm"));
-  EXPECT_TRUE(decide_verdict(r, {.tolerance_mm = 0.7,
-                                 .deviation_statistic = DeviationStatistic::kMax}).pass());
+  EXPECT_TRUE(
+      decide_verdict(r, {.tolerance_mm = 0.7, .deviation_statistic = DeviationStatistic::kMax})
+          .pass());
 
   r = good_report();
   r.mutable_deviation()->set_points(0);
@@ -100,7 +101,8 @@ TEST(Verdict, AnalysisHealth) {
   EXPECT_FALSE(v.pass());
   ASSERT_EQ(v.reasons_size(), 2);
   EXPECT_EQ(v.reasons(0), "deformation field coverage 0.72 < minimum 0.90 (min_cost_matching)");
-  EXPECT_EQ(v.reasons(1), "global fit residual rms 1.32 mm > limit 1.00 mm: the analysis cannot be trusted");
+  EXPECT_EQ(v.reasons(1),
+            "global fit residual rms 1.32 mm > limit 1.00 mm: the analysis cannot be trusted");
   // No field computed: coverage is not judged.
   r = good_report();
   r.mutable_deformation_field()->set_model_points(0);

@@ -1,7 +1,6 @@
 // Point-set matching: dense and sparse paths agree, the global certificate holds, infeasible
 // candidate graphs are widened or fall back to the dense solver.
 #include "analysis/matching/assignment_points.hpp"
-#include "tests/analysis/synthetic.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,6 +8,8 @@
 #include <limits>
 #include <numeric>
 #include <random>
+
+#include "tests/analysis/synthetic.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -76,8 +77,7 @@ TEST(PointMatching, SparseAgreesWithDense) {
     ASSERT_TRUE(dense.ok());
     EXPECT_TRUE(dense->used_dense);
     for (const int k : {1, 3, 10, 24}) {
-      const auto sparse =
-          match_points(model, scan, {.candidate_neighbors = k, .dense_limit = 100});
+      const auto sparse = match_points(model, scan, {.candidate_neighbors = k, .dense_limit = 100});
       ASSERT_TRUE(sparse.ok());
       EXPECT_FALSE(sparse->used_dense) << "k = " << k;
       // With one candidate per point the first solve is optimal only on that graph; pricing
@@ -123,8 +123,8 @@ TEST(PointMatching, InfeasibleGraphIsWidened) {
   std::vector<Vec3> model, scan;
   crowded(model, scan);
   const auto exact = match_points(model, scan, {.dense_limit = 1000});
-  const auto m = match_points(model, scan, {.candidate_neighbors = 1, .dense_limit = 10,
-                                            .max_widening_rounds = 10});
+  const auto m = match_points(
+      model, scan, {.candidate_neighbors = 1, .dense_limit = 10, .max_widening_rounds = 10});
   ASSERT_TRUE(exact.ok() && m.ok());
   EXPECT_FALSE(m->used_dense);
   EXPECT_GE(m->widening_rounds, 5);  // k = 1, 2, ..., 32 still share too few scan points
@@ -136,8 +136,8 @@ TEST(PointMatching, InfeasibleGraphFallsBackToDense) {
   std::vector<Vec3> model, scan;
   crowded(model, scan);
   const auto exact = match_points(model, scan, {.dense_limit = 1000});
-  const auto m = match_points(model, scan, {.candidate_neighbors = 1, .dense_limit = 10,
-                                            .max_widening_rounds = 2});
+  const auto m = match_points(
+      model, scan, {.candidate_neighbors = 1, .dense_limit = 10, .max_widening_rounds = 2});
   ASSERT_TRUE(exact.ok() && m.ok());
   EXPECT_TRUE(m->used_dense);
   EXPECT_EQ(m->widening_rounds, 2);
@@ -163,8 +163,8 @@ TEST(PointMatching, EmptyAndSingle) {
 }
 
 TEST(PointMatching, RejectsBadInput) {
-  const auto nan = match_points({Vec3(0, std::numeric_limits<double>::quiet_NaN(), 0)},
-                                {Vec3::Zero()});
+  const auto nan =
+      match_points({Vec3(0, std::numeric_limits<double>::quiet_NaN(), 0)}, {Vec3::Zero()});
   ASSERT_FALSE(nan.ok());
   EXPECT_NE(nan.message().find("model point 0"), std::string::npos);
   EXPECT_FALSE(match_points({Vec3::Zero()}, {Vec3::Zero()}, {.candidate_neighbors = 0}).ok());

@@ -1,6 +1,5 @@
 // The dense and sparse assignment solvers against brute force and their own dual certificate.
 #include "analysis/matching/assignment.hpp"
-#include "tests/analysis/assignment_brute_force.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,6 +7,8 @@
 #include <limits>
 #include <numeric>
 #include <random>
+
+#include "tests/analysis/assignment_brute_force.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -129,8 +130,8 @@ TEST(DenseAssignment, EmptyAndSingle) {
 TEST(DenseAssignment, RejectsBadInput) {
   EXPECT_FALSE(solve_dense(DenseCostMatrix{3, 2, std::vector<double>(6, 1.0)}).ok());
   EXPECT_FALSE(solve_dense(DenseCostMatrix{2, 2, {1, 2, 3}}).ok());
-  const auto nan = solve_dense(
-      DenseCostMatrix{2, 2, {1, std::numeric_limits<double>::quiet_NaN(), 3, 4}});
+  const auto nan =
+      solve_dense(DenseCostMatrix{2, 2, {1, std::numeric_limits<double>::quiet_NaN(), 3, 4}});
   ASSERT_FALSE(nan.ok());
   EXPECT_NE(nan.message().find("row 0, column 1"), std::string::npos) << nan.message();
 }
@@ -236,8 +237,8 @@ TEST(SparseAssignment, EmptySingleAndMalformed) {
   ASSERT_TRUE(a.ok());
   EXPECT_EQ(a->row_to_col[0], 2);
   EXPECT_DOUBLE_EQ(a->total_cost, 5.0);
-  EXPECT_FALSE(solve_sparse(CandidateGraph{1, 3, {0, 1}, {3}, {1.0}}).ok());   // column 3
-  EXPECT_FALSE(solve_sparse(CandidateGraph{1, 3, {0, 2}, {0}, {1.0}}).ok());   // sizes
+  EXPECT_FALSE(solve_sparse(CandidateGraph{1, 3, {0, 1}, {3}, {1.0}}).ok());  // column 3
+  EXPECT_FALSE(solve_sparse(CandidateGraph{1, 3, {0, 2}, {0}, {1.0}}).ok());  // sizes
   EXPECT_FALSE(solve_sparse(CandidateGraph{2, 1, {0, 1, 2}, {0, 0}, {1, 1}}).ok());
 }
 

@@ -2,12 +2,11 @@
 #include "analysis/matching/compensation.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <unistd.h>
 
 namespace springscan::analysis {
 namespace {
@@ -48,7 +47,8 @@ TEST(Compensation, ConstantFieldIsMirroredAndScaled) {
 
 TEST(Compensation, LinearFieldIsReproducedInTheInterior) {
   // A symmetric Gaussian window on a regular grid reproduces a linear field away from borders.
-  const auto field = grid_field([](const Vec3& p) { return Vec3(0.01 * p.y(), 0.0, 0.02 * p.x()); });
+  const auto field =
+      grid_field([](const Vec3& p) { return Vec3(0.01 * p.y(), 0.0, 0.02 * p.x()); });
   const auto c = compensation(field, {Vec3(20, 20, 0), Vec3(14, 26, 0)}, {.scale = 1.0});
   ASSERT_TRUE(c.ok());
   for (const auto& v : c->vectors) {

@@ -30,8 +30,10 @@ TEST(MatchingProto, OverridesRoundTrip) {
   EXPECT_EQ(f2->matching.candidate_neighbors, 7);
   EXPECT_EQ(f2->matching.dense_limit, 300);
 
-  const VerdictSettings v{.tolerance_mm = 0.3, .angle_tolerance_deg = 0.5,
-                          .deviation_statistic = DeviationStatistic::kMax, .min_coverage = 0.8,
+  const VerdictSettings v{.tolerance_mm = 0.3,
+                          .angle_tolerance_deg = 0.5,
+                          .deviation_statistic = DeviationStatistic::kMax,
+                          .min_coverage = 0.8,
                           .max_fit_rms_mm = 0.4};
   v1::VerdictSettings vm;
   to_proto(v, &vm);

@@ -14,8 +14,8 @@ namespace {
 PointCloud sphere(double radius_mm, double spacing_mm) {
   PointCloud cloud;
   const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
-  const auto n = static_cast<int>(4.0 * std::numbers::pi * radius_mm * radius_mm /
-                                  (spacing_mm * spacing_mm));
+  const auto n =
+      static_cast<int>(4.0 * std::numbers::pi * radius_mm * radius_mm / (spacing_mm * spacing_mm));
   for (int i = 0; i < n; ++i) {
     const double z = 1.0 - 2.0 * (i + 0.5) / n;
     const double rho = std::sqrt(1.0 - z * z);

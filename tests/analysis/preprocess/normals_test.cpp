@@ -46,7 +46,8 @@ TEST(Normals, OrientAlongReferenceFlipsToTheReferenceSide) {
   auto result = estimate_normals(part.points, settings);
   ASSERT_TRUE(result);
   orient_along_reference(part.points, result->normals, KdTree(part.points), part.normals);
-  for (std::size_t i = 0; i < part.size(); ++i) EXPECT_GT(result->normals[i].dot(part.normals[i]), 0.9);
+  for (std::size_t i = 0; i < part.size(); ++i)
+    EXPECT_GT(result->normals[i].dot(part.normals[i]), 0.9);
 }
 
 TEST(Normals, TinyAndBadInputs) {

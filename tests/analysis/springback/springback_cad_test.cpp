@@ -2,11 +2,11 @@
 // shape, sampled (sample_cad) and segmented (segment_cad) like an imported IGES/STEP part.
 #include <gtest/gtest.h>
 
-#include "simulators/parts/cad_profile.hpp"
 #include "analysis/cad/sampling.hpp"
 #include "analysis/cad/segmentation.hpp"
-#include "simulators/parts/sheet_part.hpp"
 #include "analysis/springback/springback.hpp"
+#include "simulators/parts/cad_profile.hpp"
+#include "simulators/parts/sheet_part.hpp"
 
 namespace springscan::analysis {
 using namespace springscan::parts;  // test and demo parts (simulators/parts)

@@ -67,7 +67,8 @@ TEST(CadProfile, IgesAndStepRoundTrip) {
       ASSERT_TRUE(back) << back.message();
       EXPECT_EQ(back->report().faces, built->report().faces) << name << " t=" << thickness;
       EXPECT_EQ(back->report().free_edges, built->report().free_edges) << name;
-      EXPECT_NEAR(back->report().area_mm2, built->report().area_mm2, 1e-4 * built->report().area_mm2)
+      EXPECT_NEAR(back->report().area_mm2, built->report().area_mm2,
+                  1e-4 * built->report().area_mm2)
           << name;
     }
   }
