@@ -1,4 +1,4 @@
-// CAD side (issue 4): load + tessellate + sample a ~50-face part, and exact distance queries.
+// CAD side: load + tessellate + sample a ~50-face part, and exact distance queries.
 // The part: a 12-flange zig-zag sheet profile, 1.5 mm thick, as a solid written to STEP
 // (23 reference-side faces, 23 offset-side faces, 2 end faces, 2 side faces = 50 faces).
 #include <benchmark/benchmark.h>

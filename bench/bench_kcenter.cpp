@@ -1,4 +1,4 @@
-// Issue 3: k-center reduction of 1M points to 5,000 centers, the spatially pruned version
+// k-center reduction of 1M points to 5,000 centers, the spatially pruned version
 // against the naive O(n k) loop; both must select exactly the same centers.
 #include <benchmark/benchmark.h>
 

@@ -1,5 +1,5 @@
-// Minimum-cost matching (issue 6 speed targets): dense n = 1,000 and sparse n = 4,096 points of
-// k-center-reduced sheet surfaces.
+// Minimum-cost matching (speed targets in docs/performance.md): dense n = 1,000 and sparse n =
+// 4,096 points of k-center-reduced sheet surfaces.
 //   bench_matching [google benchmark flags]      the timings
 //   bench_matching --export=DIR                  writes the instances, our costs and median
 //                                                times for bench/reference_scipy.py

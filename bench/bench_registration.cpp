@@ -1,4 +1,4 @@
-// Issue 3 speed target: a 1M-point scan against a 100k-point model on 2 cores, reduction + PCA
+// Speed target: a 1M-point scan against a 100k-point model on 2 cores, reduction + PCA
 // + ICP to convergence + signed deviation of all 1M points in <= 400 ms (run_inspection).
 // With SPRINGSCAN_BENCH_DATA_DIR set, the same data is written there as model.ply / scan.ply
 // for bench/reference_open3d.py.

@@ -1,4 +1,4 @@
-// The HTML report for a 1M-point scan (issue 9: <= 300 ms), and its parts: the subsample, one
+// The HTML report for a 1M-point scan (its budget: <= 300 ms), and its parts: the subsample, one
 // rendered view, one PNG. The scan is the synthetic hat profile of tests/report.
 #include <benchmark/benchmark.h>
 

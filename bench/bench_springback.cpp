@@ -1,4 +1,4 @@
-// Local fits and the bend table for a hat-profile scan (issue 5 budget: 1M points in 150 ms
+// Local fits and the bend table for a hat-profile scan (budget: 1M points in 150 ms
 // on 2 cores). The scan is simulated once, already in the CAD frame with a small pose error
 // left over from the global fit; each iteration runs measure_springback on it.
 #include <benchmark/benchmark.h>

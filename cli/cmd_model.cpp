@@ -1,5 +1,5 @@
 // springscan model: load a CAD file and show what the station will see of it: faces, flanges
-// and bends (issue 4), as text or JSON, so a user can check a part before it goes on the line.
+// and bends, as text or JSON, so a user can check a part before it goes on the line.
 #include <cstdio>
 #include <iostream>
 #include <sstream>

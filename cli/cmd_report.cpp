@@ -1,4 +1,4 @@
-// springscan report: renders the HTML inspection report again from a saved report (issue 9).
+// springscan report: renders the HTML inspection report again from a saved report.
 #include <google/protobuf/util/json_util.h>
 
 #include <filesystem>

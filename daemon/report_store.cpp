@@ -127,7 +127,7 @@ Expected<std::string> ReportStore::persist(std::uint64_t record, const v1::Inspe
       return fail("deviation.ply for record " + std::to_string(record) + ": " + ply.message());
     files.emplace_back("deviation.ply", std::move(*ply));
   }
-  // The page a quality engineer opens (issue 9); an empty cloud still renders, without pictures.
+  // The page a quality engineer opens; an empty cloud still renders, without pictures.
   static const analysis::PointCloud kNoCloud;
   auto html = report::render_report_html(report, deviation_cloud ? *deviation_cloud : kNoCloud);
   if (html) files.emplace_back("report.html", std::move(*html));

@@ -1,7 +1,7 @@
 #pragma once
 // Point-splat rendering of a (reduced) cloud into an RGB raster with a z-buffer: the pictures
 // of the report are drawn from at most ~100k points, so a 1M-point scan costs no more to show
-// than a 100k one (issue 9: the report within 300 ms).
+// than a 100k one (the report has 300 ms).
 
 #include <cstdint>
 #include <vector>

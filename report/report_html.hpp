@@ -1,5 +1,5 @@
 #pragma once
-// The HTML inspection report a quality engineer reads (issue 9): one self-contained page
+// The HTML inspection report a quality engineer reads: one self-contained page
 // (no external file, no network: pictures are inline SVG and data: URI PNGs) with the verdict
 // and reasons on top, deviation colour maps, the bend table with the bends labelled on a
 // picture, the global fit's error progression (paper, Figure 6b), compensation arrows,

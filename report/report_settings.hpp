@@ -1,5 +1,5 @@
 #pragma once
-// Settings of the HTML inspection report (issue 9). Defaults work as they are.
+// Settings of the HTML inspection report. Defaults work as they are.
 
 #include <cstddef>
 #include <cstdint>

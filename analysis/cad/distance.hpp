@@ -1,5 +1,5 @@
 #pragma once
-// Exact signed distance from points to the CAD surface (issue 4; DESIGN.md stage 5: "exact
+// Exact signed distance from points to the CAD surface (DESIGN.md stage 5: "exact
 // projection on the face, sign by the face normal").
 
 #include <memory>

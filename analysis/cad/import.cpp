@@ -1,4 +1,4 @@
-// IGES / STEP / BRep import: read, convert to mm, sew, heal (issue 4). The shape is then counted
+// IGES / STEP / BRep import: read, convert to mm, sew, heal. The shape is then counted
 // and tessellated by make_cad_shape (cad_shape.cpp).
 #include <BRepBndLib.hxx>
 #include <BRepBuilderAPI_Sewing.hxx>

@@ -1,5 +1,5 @@
 #pragma once
-// CAD import through OpenCASCADE (issue 4): IGES, STEP and OpenCASCADE .brep files read into a
+// CAD import through OpenCASCADE: IGES, STEP and OpenCASCADE .brep files read into a
 // healed, tessellated CadShape, lengths in millimetres. Only our own types appear here; the
 // OpenCASCADE side lives in analysis/cad_*.cpp.
 

@@ -1,5 +1,5 @@
 #pragma once
-// The CAD side in one call (issue 4): load, sample, segment and index a part for exact distances,
+// The CAD side in one call: load, sample, segment and index a part for exact distances,
 // with an on-disk model cache keyed by the CAD file's SHA-256 so that a restart is fast.
 
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// The CAD part segmented into flanges and bends (issue 4; DESIGN.md stages 6-7: the local best
+// The CAD part segmented into flanges and bends (DESIGN.md stages 6-7: the local best
 // fits run on the flanges, springback is measured at the bends).
 
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// Compensation vectors (DESIGN.md stage 9, issue 6): at model control points in the CAD frame,
+// Compensation vectors (DESIGN.md stage 9): at model control points in the CAD frame,
 // c = -alpha * d, where d is the deformation field interpolated smoothly at the control point,
 // limited to a maximum length. A tool designer moves the tool surface by c to pre-bend against
 // the measured springback (docs/matching.md "Compensation").

@@ -1,6 +1,6 @@
 #pragma once
 // OpenCASCADE shapes of sheet profiles (simulators/parts/sheet_profile.hpp): the test parts and the
-// demo part of issue 4, whose bends are known exactly from the ProfileSpec.
+// demo part, whose bends are known exactly from the ProfileSpec.
 
 #include <string>
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# springscan match end to end (issue 6): pairs.csv against optima the test constructs or finds
+# springscan match end to end: pairs.csv against optima the test constructs or finds
 # by brute force, the one-to-one property, |model| > |scan|, input formats, exit codes and
 # one-line errors.
 #   match_test.sh SPRINGSCAN_BINARY

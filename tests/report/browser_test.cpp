@@ -1,4 +1,4 @@
-// The report in a real browser (issue 9): headless Chromium renders the page to a screenshot
+// The report in a real browser: headless Chromium renders the page to a screenshot
 // that must not be blank, and its DOM must hold the bend rows. Skips only where Chromium is
 // not installed. The browser runs in its own process group, killed after a timeout.
 #include <fcntl.h>

@@ -1,5 +1,5 @@
 // run_inspection fills the deformation field, the compensation vectors and the verdict
-// (stages 8-9, issue 6).
+// (stages 8-9).
 #include <gtest/gtest.h>
 
 #include "analysis/cad/point_model.hpp"

@@ -1,5 +1,5 @@
 // The verdict's fit-health rule on a large production part: a perfectly made part, scanned with
-// scanner noise, must pass whatever the spacing of the model samples (issue 13, defect 3).
+// scanner noise, must pass whatever the spacing of the model samples.
 #include <gtest/gtest.h>
 
 #include <random>

@@ -1,4 +1,4 @@
-// The sign of springback on real production parts (issue 13, defect 2): every bend of the
+// The sign of springback on real production parts: every bend of the
 // openamr parts and the nema-17 bracket, with either side of the sheet as each flange's CAD
 // reference, opened and closed by a known angle, gives that angle back with its sign; closed
 // hems (180 degrees) do not wrap to 360.
