@@ -106,6 +106,7 @@ std::string resolve(const std::string& path, const std::string& config_file) {
   return (fs::path(config_file).parent_path() / path).lexically_normal().string();
 }
 
+// One field after the other, each checked with its range (about 65 lines: a list, not logic).
 std::string apply_modbus(const v1::ModbusConfig& m, const Locator& at, DaemonSettings& out) {
   ModbusServerSettings& s = out.station.modbus;
   MachineSettings& machine = out.station.machine;

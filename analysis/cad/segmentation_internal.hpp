@@ -10,7 +10,6 @@ namespace springscan::analysis {
 struct FlangeTable {
   std::vector<Flange> flanges;
   std::vector<int> flange_of_face;   ///< -1 for faces in no flange
-  std::vector<double> thickness_mm;  ///< per flange: distance of its two sides, 0 one-sided
 };
 
 FlangeTable find_flanges(const CadShape& shape, const std::vector<CadFaceInfo>& infos, bool solid,

@@ -149,15 +149,16 @@ FlangeTable find_flanges(const CadShape& shape, const std::vector<CadFaceInfo>& 
     flange.area_mm2 = side.area;
     flange.thickness_mm = j >= 0 ? pair_thickness[i] : 0.0;
     for (int f : flange.face_ids) table.flange_of_face[static_cast<std::size_t>(f)] = flange.id;
-    table.thickness_mm.push_back(j >= 0 ? pair_thickness[i] : 0.0);
     table.flanges.push_back(std::move(flange));
   }
   return table;
 }
 
-std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInfo>& infos,
-                             const FlangeTable& flanges, bool solid,
-                             const CadSegmentationSettings& settings) {
+namespace {
+
+// Cylinder faces grouped by axis and radius (split faces of one cylinder).
+std::map<int, std::vector<int>> cylinder_groups(const std::vector<CadFaceInfo>& infos,
+                                                const CadSegmentationSettings& settings) {
   Groups groups(infos.size());
   std::vector<bool> cylindrical(infos.size());
   for (const auto& f : infos) {
@@ -169,24 +170,38 @@ std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInf
         groups.unite(f.id, n);
     }
   }
-  // Each cylinder group with the flanges it touches; coaxial groups joining the same two
-  // flanges (the inner and outer side of one solid bend) merge.
-  std::vector<std::pair<std::vector<int>, std::set<int>>> candidates;
-  for (auto& [root, members] : groups.members(cylindrical)) {
-    std::set<int> touched;
-    for (int f : members)
-      for (int n : infos[static_cast<std::size_t>(f)].neighbors)
-        if (flanges.flange_of_face[static_cast<std::size_t>(n)] >= 0)
-          touched.insert(flanges.flange_of_face[static_cast<std::size_t>(n)]);
-    if (touched.size() != 2) continue;
-    // A bend's axis lies parallel to both flanges (a hole's axis crosses them).
-    const Vec3& axis = infos[static_cast<std::size_t>(members.front())].direction;
-    const double sin_tol = std::sin(settings.coplanar_angle_deg / kRadToDeg);
-    if (std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(*touched.begin())].normal)) >
-            sin_tol ||
-        std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(*touched.rbegin())].normal)) >
-            sin_tol)
-      continue;
+  return groups.members(cylindrical);
+}
+
+// The flanges a cylinder group touches, when it is a bend between two of them: exactly two,
+// with its axis parallel to both (a hole's axis crosses its flange). Empty otherwise.
+std::set<int> bend_flanges(const std::vector<int>& members, const std::vector<CadFaceInfo>& infos,
+                           const FlangeTable& flanges, const CadSegmentationSettings& settings) {
+  std::set<int> touched;
+  for (int f : members)
+    for (int n : infos[static_cast<std::size_t>(f)].neighbors)
+      if (flanges.flange_of_face[static_cast<std::size_t>(n)] >= 0)
+        touched.insert(flanges.flange_of_face[static_cast<std::size_t>(n)]);
+  if (touched.size() != 2) return {};
+  const Vec3& axis = infos[static_cast<std::size_t>(members.front())].direction;
+  const double sin_tol = std::sin(settings.coplanar_angle_deg / kRadToDeg);
+  for (int flange : touched)
+    if (std::abs(axis.dot(flanges.flanges[static_cast<std::size_t>(flange)].normal)) > sin_tol)
+      return {};
+  return touched;
+}
+
+using BendCandidate = std::pair<std::vector<int>, std::set<int>>;  // faces, the two flanges
+
+// Each cylinder group that joins two flanges; groups joining the same two flanges (the inner
+// and outer side of one solid bend) merge.
+std::vector<BendCandidate> bend_candidates(const std::vector<CadFaceInfo>& infos,
+                                           const FlangeTable& flanges,
+                                           const CadSegmentationSettings& settings) {
+  std::vector<BendCandidate> candidates;
+  for (auto& [root, members] : cylinder_groups(infos, settings)) {
+    const std::set<int> touched = bend_flanges(members, infos, flanges, settings);
+    if (touched.empty()) continue;
     bool merged = false;
     for (auto& [faces, pair] : candidates) {
       // Two flanges share at most one bend: merge whatever joins the same pair, also when the
@@ -204,34 +219,48 @@ std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInf
     }
     if (!merged) candidates.emplace_back(members, touched);
   }
+  return candidates;
+}
+
+// A bend's axis (through the projection of its area centroid) and inner radius.
+void bend_geometry(const std::vector<CadFaceInfo>& infos, const FlangeTable& flanges, bool solid,
+                   Bend& bend) {
+  const CadFaceInfo& first = infos[static_cast<std::size_t>(bend.face_ids.front())];
+  bend.axis_direction = canonical_direction(first.direction);
+  Vec3 centroid = Vec3::Zero();
+  double area = 0.0, concave = INFINITY, convex = INFINITY;
+  for (int f : bend.face_ids) {
+    const auto& info = infos[static_cast<std::size_t>(f)];
+    centroid += info.area_mm2 * info.centroid;
+    area += info.area_mm2;
+    (info.convex ? convex : concave) = std::min(info.convex ? convex : concave, info.radius_mm);
+  }
+  centroid /= std::max(area, 1e-300);
+  bend.axis_point = first.axis_point +
+                    (centroid - first.axis_point).dot(bend.axis_direction) * bend.axis_direction;
+  // Inner radius: a shell has one surface; a solid's concave side is the inside of the bend,
+  // and with only a rounded outside the inside is the outer radius minus the thickness.
+  const double t = std::max(flanges.flanges[static_cast<std::size_t>(bend.flange_a)].thickness_mm,
+                            flanges.flanges[static_cast<std::size_t>(bend.flange_b)].thickness_mm);
+  if (!solid)
+    bend.radius_mm = std::min(concave, convex);
+  else
+    bend.radius_mm = std::isfinite(concave) ? concave : std::max(convex - t, 0.0);
+}
+
+}  // namespace
+
+std::vector<Bend> find_bends(const CadShape& shape, const std::vector<CadFaceInfo>& infos,
+                             const FlangeTable& flanges, bool solid,
+                             const CadSegmentationSettings& settings) {
   std::vector<Bend> bends;
-  for (const auto& [faces, pair] : candidates) {
+  for (const auto& [faces, pair] : bend_candidates(infos, flanges, settings)) {
     Bend bend;
     bend.id = static_cast<int>(bends.size());
     bend.face_ids = faces;
     bend.flange_a = *pair.begin();
     bend.flange_b = *pair.rbegin();
-    const CadFaceInfo& first = infos[static_cast<std::size_t>(faces.front())];
-    bend.axis_direction = canonical_direction(first.direction);
-    Vec3 centroid = Vec3::Zero();
-    double area = 0.0, concave = INFINITY, convex = INFINITY;
-    for (int f : faces) {
-      const auto& info = infos[static_cast<std::size_t>(f)];
-      centroid += info.area_mm2 * info.centroid;
-      area += info.area_mm2;
-      (info.convex ? convex : concave) = std::min(info.convex ? convex : concave, info.radius_mm);
-    }
-    centroid /= std::max(area, 1e-300);
-    bend.axis_point = first.axis_point +
-                      (centroid - first.axis_point).dot(bend.axis_direction) * bend.axis_direction;
-    // Inner radius: a shell has one surface; a solid's concave side is the inside of the bend,
-    // and with only a rounded outside the inside is the outer radius minus the thickness.
-    const double t = std::max(flanges.thickness_mm[static_cast<std::size_t>(bend.flange_a)],
-                              flanges.thickness_mm[static_cast<std::size_t>(bend.flange_b)]);
-    if (!solid)
-      bend.radius_mm = std::min(concave, convex);
-    else
-      bend.radius_mm = std::isfinite(concave) ? concave : std::max(convex - t, 0.0);
+    bend_geometry(infos, flanges, solid, bend);
     bend.nominal_angle_deg = bend_angle_deg(shape, infos, flanges, bend);
     bends.push_back(std::move(bend));
   }

@@ -25,6 +25,8 @@ namespace springscan::analysis::detail {
 
 /// `scan_row(i, visit)` calls visit(j, c_ij) for every edge of row i.
 /// Returns false (and leaves `a` to be reset by the caller) if rounding broke the invariants.
+/// Longer than our usual 60 lines on purpose: it is Jonker and Volgenant's augmenting row
+/// reduction step by step, and split into pieces it no longer reads against the paper.
 template <class ScanRow>
 bool augmenting_row_reduction(std::size_t rows, const ScanRow& scan_row, Assignment& a,
                               int passes = 2) {

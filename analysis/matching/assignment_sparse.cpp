@@ -71,7 +71,9 @@ void row_reduction(const CandidateGraph& g, Assignment& a) {
 }
 
 // Dijkstra from free row `start` over reduced costs; the same dual update and augmentation as
-// the dense solver, restricted to the explored part of the graph.
+// the dense solver, restricted to the explored part of the graph. One function on purpose (a
+// little over 60 lines): the search, the dual update and the augmentation share the workspace
+// invariants, which read best in one place.
 bool augment_from(const CandidateGraph& g, std::int32_t start, Assignment& a, SparseWorkspace& w) {
   w.visited_rows.clear();
   w.visited_cols.clear();
