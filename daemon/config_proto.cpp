@@ -124,6 +124,13 @@ std::string apply_modbus(const v1::ModbusConfig& m, const Locator& at, DaemonSet
     }
     s.allowed_clients.push_back(m.allowed_clients(i));
   }
+  for (int i = 0; i < m.plc_clients_size(); ++i) {
+    if (!ipv4(m.plc_clients(i))) {
+      return at.where({{"modbus", -1}, {"plc_clients", i}}) + ": '" + m.plc_clients(i) +
+             "' is not an IPv4 address";
+    }
+    s.plc_clients.push_back(m.plc_clients(i));
+  }
   std::string e;
   const auto path = [](const char* field) { return Locator::Path{{"modbus", -1}, {field, -1}}; };
   if (m.has_port() && !(e = out_of_range(at, path("port"), m.port(), 0, 65535)).empty()) return e;
@@ -145,6 +152,14 @@ std::string apply_modbus(const v1::ModbusConfig& m, const Locator& at, DaemonSet
       return e;
     }
     s.max_connections = m.max_connections();
+  }
+  if (m.has_max_connections_per_address()) {
+    if (!(e = out_of_range(at, path("max_connections_per_address"),
+                           m.max_connections_per_address(), 0, 16))
+             .empty()) {
+      return e;
+    }
+    s.max_connections_per_address = m.max_connections_per_address();
   }
   struct Seconds {
     const char* name;

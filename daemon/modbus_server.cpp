@@ -68,6 +68,13 @@ analysis::Expected<std::unique_ptr<ModbusServer>> ModbusServer::open(
     }
     server->allowed_.push_back(addr.s_addr);
   }
+  for (const std::string& text : settings.plc_clients) {
+    in_addr addr{};
+    if (inet_pton(AF_INET, text.c_str(), &addr) != 1) {
+      return fail("modbus.plc_clients: '" + text + "' is not an IPv4 address");
+    }
+    server->plc_.push_back(addr.s_addr);
+  }
   sockaddr_in addr{};
   addr.sin_family = AF_INET;
   addr.sin_port = htons(static_cast<std::uint16_t>(settings.port));
@@ -85,7 +92,9 @@ analysis::Expected<std::unique_ptr<ModbusServer>> ModbusServer::open(
                 (error == EACCES ? " (port < 1024 needs CAP_NET_BIND_SERVICE)" : "") +
                 (error == EADDRINUSE ? " (another process holds the port)" : ""));
   }
-  if (listen(server->listen_fd_, 8) != 0) return fail("listen " + where + ": " + errno_text(errno));
+  // A backlog that holds a burst of reconnects (a PLC and its stale sessions) without SYN drops.
+  if (listen(server->listen_fd_, 64) != 0)
+    return fail("listen " + where + ": " + errno_text(errno));
   socklen_t length = sizeof addr;
   getsockname(server->listen_fd_, reinterpret_cast<sockaddr*>(&addr), &length);
   server->port_ = ntohs(addr.sin_port);
@@ -104,6 +113,36 @@ analysis::Expected<std::unique_ptr<ModbusServer>> ModbusServer::open(
 bool ModbusServer::allowed(std::uint32_t address_be) const {
   return allowed_.empty() ||
          std::find(allowed_.begin(), allowed_.end(), address_be) != allowed_.end();
+}
+
+bool ModbusServer::is_plc(std::uint32_t address_be) const {
+  return plc_.empty() || std::find(plc_.begin(), plc_.end(), address_be) != plc_.end();
+}
+
+std::ptrdiff_t ModbusServer::slot_for(std::uint32_t address_be) const {
+  // Least recently active first: a PLC polls every few hundred ms, so a connection it still
+  // uses is never the stalest; half-open ones (cable pulled, PLC rebooted) are.
+  const auto stalest = [this](const auto& candidate) {
+    std::ptrdiff_t best = -1;
+    for (std::size_t i = 0; i < clients_.size(); ++i) {
+      if (!candidate(clients_[i])) continue;
+      if (best < 0 ||
+          clients_[i].last_activity < clients_[static_cast<std::size_t>(best)].last_activity)
+        best = static_cast<std::ptrdiff_t>(i);
+    }
+    return best;
+  };
+  const auto same_address = [address_be](const Client& c) { return c.address_be == address_be; };
+  const auto per_address =
+      static_cast<std::ptrdiff_t>(std::count_if(clients_.begin(), clients_.end(), same_address));
+  if (settings_.max_connections_per_address > 0 &&
+      per_address >= settings_.max_connections_per_address)
+    return stalest(same_address);
+  if (clients_.size() < static_cast<std::size_t>(settings_.max_connections)) return -1;
+  const std::ptrdiff_t other = stalest([this](const Client& c) { return !is_plc(c.address_be); });
+  if (other >= 0) return other;
+  // Only PLC connections are left: a PLC newcomer replaces the stalest (its own dead session).
+  return is_plc(address_be) ? stalest([](const Client&) { return true; }) : -2;
 }
 
 void ModbusServer::add_poll_fds(std::vector<pollfd>& fds) const {
@@ -155,20 +194,30 @@ void ModbusServer::accept_clients(Clock::time_point now) {
       continue;
     }
     // libmodbus select()s on the fd: fds >= FD_SETSIZE overflowed before 3.1.12 (notes sec. 2).
-    if (clients_.size() >= static_cast<std::size_t>(settings_.max_connections) ||
-        fd >= FD_SETSIZE) {
+    const std::ptrdiff_t victim = fd < FD_SETSIZE ? slot_for(addr.sin_addr.s_addr) : -2;
+    if (victim == -2) {
       ++stats_.refused_too_many;
-      log_.warning("refused Modbus connection from " + peer + ": already " +
-                   std::to_string(clients_.size()) + " clients (modbus.max_connections = " +
-                   std::to_string(settings_.max_connections) +
-                   "). A PLC that reconnects without closing leaves stale connections; they "
-                   "close after modbus.idle_timeout_s.");
+      log_.warning("refused Modbus connection from " + peer + ": all " +
+                   std::to_string(clients_.size()) +
+                   " slots (modbus.max_connections) are held by PLC addresses "
+                   "(modbus.plc_clients) and this is not one of them");
       close(fd);
       continue;
     }
+    if (victim >= 0) {
+      ++stats_.evicted;
+      const Client& old = clients_[static_cast<std::size_t>(victim)];
+      const auto idle_s =
+          std::chrono::duration_cast<std::chrono::milliseconds>(now - old.last_activity).count() /
+          1000.0;
+      close_client(static_cast<std::size_t>(victim),
+                   "dropped for the new connection from " + peer + " (least recently active, " +
+                       std::to_string(idle_s) + " s idle; modbus.max_connections = " +
+                       std::to_string(settings_.max_connections) + ")");
+    }
     set_client_options(fd);
     ++stats_.accepted;
-    clients_.push_back(Client{fd, peer, now, false, now});
+    clients_.push_back(Client{fd, peer, addr.sin_addr.s_addr, now, false, now});
     log_.info("Modbus client " + peer + " connected (" + std::to_string(clients_.size()) +
               " of at most " + std::to_string(settings_.max_connections) + ")");
   }
@@ -220,6 +269,9 @@ bool ModbusServer::serve_frame(Client& client, std::size_t frame_bytes, const Wr
     if (recv(client.fd, req, frame_bytes, MSG_DONTWAIT) != static_cast<ssize_t>(frame_bytes)) {
       return false;
     }
+    if (req[kMbapHeaderBytes] >= 0x80) {
+      return reply_high_function_exception(client, req, static_cast<unsigned>(verdict.exception));
+    }
     return modbus_reply_exception(ctx, req, static_cast<unsigned>(verdict.exception)) >= 0;
   }
   const int received = modbus_receive(ctx, req);
@@ -237,6 +289,23 @@ bool ModbusServer::serve_frame(Client& client, std::size_t frame_bytes, const Wr
   }
   if (is_write(req[kMbapHeaderBytes]) && on_write) on_write();
   return true;
+}
+
+bool ModbusServer::reply_high_function_exception(const Client& client, const std::uint8_t* req,
+                                                 unsigned exception) {
+  // MBAP (transaction id echoed, protocol 0, length 3, unit echoed), then the function code
+  // as received (its high bit is already set) and the exception code (spec section 7).
+  const std::uint8_t reply[] = {req[0],
+                                req[1],
+                                0,
+                                0,
+                                0,
+                                3,
+                                req[6],
+                                req[kMbapHeaderBytes],
+                                static_cast<std::uint8_t>(exception)};
+  return send(client.fd, reply, sizeof reply, MSG_NOSIGNAL | MSG_DONTWAIT) ==
+         static_cast<ssize_t>(sizeof reply);
 }
 
 int ModbusServer::expire(Clock::time_point now, int cap_ms) {

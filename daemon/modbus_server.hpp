@@ -30,16 +30,21 @@ struct ModbusServerSettings {
   int port = 502;                            ///< 0: any free port (tests)
   std::vector<std::string> allowed_clients;  ///< IPv4 addresses; empty allows any
   std::uint8_t unit_id = 1;                  ///< also answered: 0xFF
-  int max_connections = 4;                   ///< more are refused at accept
-  double idle_timeout_s = 60.0;              ///< a connection silent this long is closed
-  double partial_frame_timeout_s = 0.5;      ///< a started frame must complete within this
+  /// The PLC's address(es), IPv4: a PLC newcomer always gets a slot, taken from a non-PLC
+  /// connection first. Empty: every allowed address counts as a PLC address.
+  std::vector<std::string> plc_clients;
+  int max_connections = 4;  ///< when full, the least recently active connection makes room
+  int max_connections_per_address = 0;   ///< 0: no limit below max_connections
+  double idle_timeout_s = 60.0;          ///< a connection silent this long is closed
+  double partial_frame_timeout_s = 0.5;  ///< a started frame must complete within this
 };
 
 /// Counters for the log, tests and the soak figures.
 struct ModbusServerStats {
   std::uint64_t accepted = 0;
   std::uint64_t refused_not_allowed = 0;
-  std::uint64_t refused_too_many = 0;
+  std::uint64_t refused_too_many = 0;  ///< full of PLC connections, newcomer not a PLC
+  std::uint64_t evicted = 0;           ///< connections dropped to make room for a newcomer
   std::uint64_t requests = 0;
   std::uint64_t exceptions = 0;
   std::uint64_t closed_bad_frame = 0;
@@ -77,6 +82,7 @@ class ModbusServer {
   struct Client {
     int fd = -1;
     std::string peer;
+    std::uint32_t address_be = 0;  ///< the peer's IPv4 address, network byte order
     Clock::time_point last_activity;
     bool partial = false;  ///< some bytes of a frame are waiting
     Clock::time_point partial_since;
@@ -92,6 +98,14 @@ class ModbusServer {
   bool serve_frame(Client& client, std::size_t frame_bytes, const WriteHook& on_write);
   void close_client(std::size_t index, const std::string& why);
   bool allowed(std::uint32_t address_be) const;
+  bool is_plc(std::uint32_t address_be) const;
+  /// Makes room for a newcomer from `address_be` when the table or its address is full: the
+  /// index of the connection to drop, -1 when none needs to go, -2 when the newcomer is refused.
+  std::ptrdiff_t slot_for(std::uint32_t address_be) const;
+  /// An exception reply for a request whose function code has its high bit set: libmodbus adds
+  /// 0x80 and wraps (0x83 -> 0x03), which reads as a normal reply to a request never sent.
+  bool reply_high_function_exception(const Client& client, const std::uint8_t* req,
+                                     unsigned exception);
 
   ModbusServerSettings settings_;
   modbus_mapping_t* mapping_;
@@ -100,6 +114,7 @@ class ModbusServer {
   int listen_fd_ = -1;
   int port_ = 0;
   std::vector<std::uint32_t> allowed_;  ///< network byte order
+  std::vector<std::uint32_t> plc_;      ///< network byte order
   std::vector<Client> clients_;
   ModbusServerStats stats_;
 };

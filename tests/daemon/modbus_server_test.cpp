@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cerrno>
 #include <memory>
+#include <set>
 #include <thread>
 #include <vector>
 
@@ -271,19 +272,134 @@ TEST(ModbusServer, SlowPartialFrameDoesNotStarveOthersAndIsClosed) {
   EXPECT_TRUE(slow.receive().empty());  // closed after the partial-frame timeout
 }
 
-TEST(ModbusServer, ConnectionsBeyondTheLimitAreRefused) {
+TEST(ModbusServer, ANewcomerTakesTheSlotOfTheLeastRecentlyActive) {
   ModbusServerSettings settings;
   settings.max_connections = 2;
   ServerHarness server(settings);
   Context a = server.client();
   Context b = server.client();
   std::uint16_t r;
-  ASSERT_EQ(modbus_read_input_registers(a.get(), 0, 1, &r), 1);
   ASSERT_EQ(modbus_read_input_registers(b.get(), 0, 1, &r), 1);
+  std::this_thread::sleep_for(20ms);
+  ASSERT_EQ(modbus_read_input_registers(a.get(), 0, 1, &r), 1);  // b is now the stalest
   RawClient third(server.port());
   third.send_bytes(frame({4, 0, 0, 0, 1}));
-  EXPECT_TRUE(third.receive().empty());
+  EXPECT_EQ(third.receive().size(), 11u);
   EXPECT_EQ(modbus_read_input_registers(a.get(), 0, 1, &r), 1);
+  EXPECT_EQ(modbus_read_input_registers(b.get(), 0, 1, &r), -1);  // closed for the newcomer
+}
+
+// A prober (or a PLC's half-open old sessions) holding 32 idle connections never locks the
+// PLC out: it reads within 100 ms, and again once they are released.
+TEST(ModbusServer, ThirtyTwoIdleConnectionsDoNotLockThePlcOut) {
+  ServerHarness server;  // max_connections 4, every address a PLC address
+  std::vector<std::unique_ptr<RawClient>> idle;
+  for (int i = 0; i < 32; ++i) idle.push_back(std::make_unique<RawClient>(server.port()));
+  std::this_thread::sleep_for(50ms);  // the server has seen them all
+  const auto read_as_plc = [&server] {
+    const auto start = std::chrono::steady_clock::now();
+    Context plc = server.client();
+    std::uint16_t r;
+    EXPECT_EQ(modbus_read_input_registers(plc.get(), 0, 1, &r), 1);
+    return std::chrono::steady_clock::now() - start;
+  };
+  EXPECT_LT(read_as_plc(), 100ms);
+  idle.clear();
+  std::this_thread::sleep_for(20ms);
+  EXPECT_LT(read_as_plc(), 100ms);
+}
+
+TEST(ModbusServer, OtherAddressesNeverTakeThePlcsSlot) {
+  ModbusServerSettings settings;
+  settings.max_connections = 2;
+  settings.plc_clients = {"127.0.0.1"};
+  ServerHarness server(settings);
+  Context plc = server.client();  // from 127.0.0.1
+  std::uint16_t r;
+  ASSERT_EQ(modbus_read_input_registers(plc.get(), 0, 1, &r), 1);
+  // Other loopback addresses (127.0.0.2) come and go: they share the one remaining slot.
+  for (int i = 0; i < 5; ++i) {
+    RawClient other(server.port(), "127.0.0.2");
+    other.send_bytes(frame({4, 0, 0, 0, 1}));
+    EXPECT_EQ(other.receive().size(), 11u) << i;
+  }
+  std::this_thread::sleep_for(20ms);
+  EXPECT_EQ(modbus_read_input_registers(plc.get(), 0, 1, &r), 1);
+  // Both slots held by the PLC: a non-PLC newcomer is refused, a PLC newcomer is served.
+  Context plc2 = server.client();
+  ASSERT_EQ(modbus_read_input_registers(plc2.get(), 0, 1, &r), 1);
+  RawClient refused(server.port(), "127.0.0.2");
+  refused.send_bytes(frame({4, 0, 0, 0, 1}));
+  EXPECT_TRUE(refused.receive().empty());
+  EXPECT_EQ(modbus_read_input_registers(plc.get(), 0, 1, &r), 1);
+  EXPECT_EQ(modbus_read_input_registers(plc2.get(), 0, 1, &r), 1);
+}
+
+TEST(ModbusServer, PerAddressLimitReplacesThatAddresssStalestConnection) {
+  ModbusServerSettings settings;
+  settings.max_connections = 4;
+  settings.max_connections_per_address = 2;
+  ServerHarness server(settings);
+  RawClient other(server.port(), "127.0.0.3");
+  other.send_bytes(frame({4, 0, 0, 0, 1}));
+  ASSERT_EQ(other.receive().size(), 11u);
+  std::vector<std::unique_ptr<RawClient>> same;
+  for (int i = 0; i < 4; ++i) {
+    same.push_back(std::make_unique<RawClient>(server.port(), "127.0.0.2"));
+    same.back()->send_bytes(frame({4, 0, 0, 0, 1}));
+    ASSERT_EQ(same.back()->receive().size(), 11u);
+    std::this_thread::sleep_for(5ms);
+  }
+  // The two oldest of 127.0.0.2 made room for its newer two; 127.0.0.3 kept its slot.
+  same[0]->send_bytes(frame({4, 0, 0, 0, 1}));
+  EXPECT_TRUE(same[0]->receive().empty());
+  same[3]->send_bytes(frame({4, 0, 0, 0, 1}));
+  EXPECT_EQ(same[3]->receive().size(), 11u);
+  other.send_bytes(frame({4, 0, 0, 0, 1}));
+  EXPECT_EQ(other.receive().size(), 11u);
+}
+
+// Modbus Application Protocol V1.1b3 section 7 and Messaging on TCP/IP section 3.1.3: an
+// exception reply is the MBAP header (transaction id and unit id echoed, protocol 0, length
+// 3), the function code with its high bit set, and one exception code.
+void expect_exception_reply(const std::vector<std::uint8_t>& request,
+                            const std::vector<std::uint8_t>& reply, std::uint8_t exception) {
+  ASSERT_EQ(reply.size(), 9u);
+  EXPECT_EQ(reply[0], request[0]);
+  EXPECT_EQ(reply[1], request[1]);
+  EXPECT_EQ(reply[2], 0);
+  EXPECT_EQ(reply[3], 0);
+  EXPECT_EQ(reply[4], 0);
+  EXPECT_EQ(reply[5], 3);
+  EXPECT_EQ(reply[6], request[6]);
+  EXPECT_EQ(reply[7], request[7] | 0x80) << "function " << int(request[7]);
+  EXPECT_EQ(reply[8], exception);
+}
+
+TEST(ModbusServer, EveryExceptionReplyFollowsTheSpec) {
+  ServerHarness server;
+  RawClient raw(server.port());
+  const std::set<int> served = {1, 2, 3, 4, 5, 6, 15, 16};
+  for (int function = 0; function <= 0xFF; ++function) {
+    if (served.count(function) != 0) continue;
+    const auto request = frame({static_cast<std::uint8_t>(function), 0, 0, 0, 1});
+    raw.send_bytes(request);
+    expect_exception_reply(request, raw.receive(), MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
+  }
+  const std::vector<std::pair<std::vector<std::uint8_t>, std::uint8_t>> cases = {
+      {frame({4, 0x27, 0x0F, 0, 1}), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS},       // 9999: no map
+      {frame({6, 0x00, 0x64, 0, 1}), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS},       // read-only
+      {frame({3, 0, 0, 0, 0}), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},               // 0 registers
+      {frame({4, 0, 0, 0, 126}), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},             // > 125
+      {frame({1, 0, 0, 0x07, 0xD1}), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},         // > 2000 bits
+      {frame({5, 0, 0, 0x12, 0x34}), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},         // coil value
+      {frame({16, 0, 1, 0, 2, 3, 0, 7, 0}), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE},  // byte count
+      {frame({4, 0, 0, 0, 1}, 9), MODBUS_EXCEPTION_GATEWAY_TARGET},                // unit 9
+  };
+  for (const auto& [request, exception] : cases) {
+    raw.send_bytes(request);
+    expect_exception_reply(request, raw.receive(), exception);
+  }
 }
 
 TEST(ModbusServer, PipelinedRequestsInOneSegmentAreAllAnswered) {
