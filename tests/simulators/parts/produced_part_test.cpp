@@ -1,0 +1,236 @@
+#include "simulators/parts/produced_part.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "analysis/cad/segmentation.hpp"
+#include "analysis/core/kdtree.hpp"
+#include "tests/simulators/parts/production_parts.hpp"
+
+namespace springscan::parts {
+namespace {
+
+using testing::loaded_part;
+using testing::production_parts;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::vector<double> random_springback(const PartModel& model, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> sb(0.2, 3.0);
+  std::vector<double> out;
+  for (std::size_t i = 0; i < model.segmentation.bends.size(); ++i) out.push_back(sb(rng));
+  return out;
+}
+
+struct Plane {
+  Vec3 centroid = Vec3::Zero();
+  Vec3 normal = Vec3::UnitZ();
+  std::size_t points = 0;
+};
+
+// Least-squares plane of the produced samples of one side of a flange: the flange's faces whose
+// CAD normal agrees with that of its largest face (the two sides together would tilt the fit).
+Plane fit_side(const ProducedPart& part, const Flange& flange,
+               const std::vector<CadFaceInfo>& faces) {
+  int largest = flange.face_ids.front();
+  for (int f : flange.face_ids) {
+    if (faces[static_cast<std::size_t>(f)].area_mm2 >
+        faces[static_cast<std::size_t>(largest)].area_mm2) {
+      largest = f;
+    }
+  }
+  const Vec3 side = faces[static_cast<std::size_t>(largest)].direction;
+  std::vector<Vec3> pts;
+  for (std::size_t i = 0; i < part.samples.size(); ++i) {
+    const int f = part.samples.face_ids[i];
+    if (std::find(flange.face_ids.begin(), flange.face_ids.end(), f) == flange.face_ids.end()) {
+      continue;
+    }
+    if (faces[static_cast<std::size_t>(f)].direction.dot(side) > 0.0)
+      pts.push_back(part.samples.points[i]);
+  }
+  Plane plane;
+  plane.points = pts.size();
+  if (pts.size() < 3) return plane;
+  for (const auto& p : pts) plane.centroid += p;
+  plane.centroid /= static_cast<double>(pts.size());
+  Mat3 cov = Mat3::Zero();
+  for (const auto& p : pts) cov += (p - plane.centroid) * (p - plane.centroid).transpose();
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(cov);
+  plane.normal = eig.eigenvectors().col(0);
+  return plane;
+}
+
+// The angle the sheet turns between two fitted flange planes: 180 degrees minus the angle
+// between the two flanges' directions away from the planes' intersection line. Needs neither
+// the normals' orientation nor the segmentation's axes.
+double turn_angle_deg(const Plane& a, const Plane& b) {
+  const Vec3 d = a.normal.cross(b.normal).normalized();
+  Mat3 m;
+  m.row(0) = a.normal.transpose();
+  m.row(1) = b.normal.transpose();
+  m.row(2) = d.transpose();
+  const Vec3 rhs(a.normal.dot(a.centroid), b.normal.dot(b.centroid), d.dot(a.centroid));
+  const Vec3 on_line = m.fullPivLu().solve(rhs);
+  Vec3 ua = d.cross(a.normal), ub = d.cross(b.normal);
+  if (ua.dot(a.centroid - on_line) < 0.0) ua = -ua;
+  if (ub.dot(b.centroid - on_line) < 0.0) ub = -ub;
+  return 180.0 - std::acos(std::clamp(ua.dot(ub), -1.0, 1.0)) / kDeg;
+}
+
+class ProducedPartOf : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ProducedPartOf, FittedFlangePlanesMeetAtNominalMinusSpringback) {
+  const auto& loaded = loaded_part(GetParam());
+  const auto& seg = loaded.model.segmentation;
+  ASSERT_FALSE(seg.bends.empty());
+  const auto springback = random_springback(loaded.model, 7);
+  const auto part = make_produced_part(loaded.model, loaded.shape, springback);
+  ASSERT_TRUE(part) << part.message();
+  EXPECT_TRUE(part->report.closing_bends.empty());
+  const auto faces = describe_faces(loaded.shape);
+  double worst = 0.0;
+  int checked = 0;
+  for (const Bend& bend : seg.bends) {
+    const BendTruth& truth = part->bends[static_cast<std::size_t>(bend.id)];
+    if (truth.hem) {
+      EXPECT_EQ(truth.springback_deg, 0.0);
+      continue;
+    }
+    EXPECT_EQ(truth.springback_deg, springback[static_cast<std::size_t>(bend.id)]);
+    const Plane a = fit_side(*part, seg.flanges[static_cast<std::size_t>(bend.flange_a)], faces);
+    const Plane b = fit_side(*part, seg.flanges[static_cast<std::size_t>(bend.flange_b)], faces);
+    ASSERT_GE(a.points, 3u);
+    ASSERT_GE(b.points, 3u);
+    const double expected = bend.nominal_angle_deg - truth.springback_deg;
+    const double error = turn_angle_deg(a, b) - expected;
+    EXPECT_NEAR(error, 0.0, 1e-6) << GetParam() << " bend " << bend.id;
+    EXPECT_NEAR(truth.produced_angle_deg, expected, 1e-12);
+    worst = std::max(worst, std::abs(error));
+    ++checked;
+  }
+  std::cout << GetParam() << ": " << checked << " bends, worst plane-fit error " << worst
+            << " deg\n";
+}
+
+// Coincident CAD vertices of neighbouring faces stay together: the part does not tear, whether
+// the faces are flanges, bend zones or sheet edges spanning flange and bend.
+TEST_P(ProducedPartOf, DoesNotTear) {
+  const auto& loaded = loaded_part(GetParam());
+  const auto part =
+      make_produced_part(loaded.model, loaded.shape, random_springback(loaded.model, 3));
+  ASSERT_TRUE(part) << part.message();
+  const CadMesh& cad = loaded.shape.mesh();
+  std::vector<std::int32_t> vertex_face(cad.vertices.size(), -1);
+  for (std::size_t t = 0; t < cad.triangles.size(); ++t) {
+    for (auto v : cad.triangles[t]) vertex_face[v] = cad.triangle_faces[t];
+  }
+  const KdTree tree(cad.vertices);
+  std::vector<Neighbor> near;
+  double worst = 0.0;
+  std::size_t pairs = 0;
+  for (std::size_t i = 0; i < cad.vertices.size(); ++i) {
+    tree.radius(cad.vertices[i], 1e-4, near);
+    for (const auto& n : near) {
+      if (vertex_face[n.index] == vertex_face[i]) continue;
+      ++pairs;
+      worst = std::max(worst, (part->mesh.vertices[n.index] - part->mesh.vertices[i]).norm());
+    }
+  }
+  EXPECT_GT(pairs, 100u);
+  EXPECT_LT(worst, 1e-9) << GetParam();
+  std::cout << GetParam() << ": " << pairs << " seam vertex pairs, widest gap " << worst << " mm\n";
+}
+
+// Bend zones stay cylinders of their radius about the produced axis, spanning nominal - springback.
+TEST_P(ProducedPartOf, BendZonesKeepTheirRadius) {
+  const auto& loaded = loaded_part(GetParam());
+  const auto& seg = loaded.model.segmentation;
+  const auto part =
+      make_produced_part(loaded.model, loaded.shape, random_springback(loaded.model, 5));
+  ASSERT_TRUE(part) << part.message();
+  for (std::size_t i = 0; i < part->samples.size(); ++i) {
+    const int f = part->samples.face_ids[i];
+    for (const Bend& bend : seg.bends) {
+      if (std::find(bend.face_ids.begin(), bend.face_ids.end(), f) == bend.face_ids.end()) continue;
+      const auto& truth = part->bends[static_cast<std::size_t>(bend.id)];
+      const Vec3 v_cad = loaded.model.samples.points[i] - bend.axis_point;
+      const Vec3 v = part->samples.points[i] - truth.axis_point;
+      const double r_cad = (v_cad - v_cad.dot(bend.axis_direction) * bend.axis_direction).norm();
+      const double r = (v - v.dot(truth.axis_direction) * truth.axis_direction).norm();
+      ASSERT_NEAR(r, r_cad, 1e-9) << "bend " << bend.id;
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(ProductionParts, ProducedPartOf, ::testing::ValuesIn(production_parts()),
+                         [](const auto& param_info) {
+                           std::string name =
+                               param_info.param.substr(0, param_info.param.rfind('.'));
+                           if (name.rfind("openamr", 0) == 0)
+                             name = name.substr(name.find('_') + 1);
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
+
+TEST(ProducedPart, ZeroSpringbackIsTheCadPart) {
+  const auto& loaded = loaded_part("openamr-MMP.00.00.00.003_Side_panel.step");
+  const std::vector<double> zero(loaded.model.segmentation.bends.size(), 0.0);
+  const auto part = make_produced_part(loaded.model, loaded.shape, zero);
+  ASSERT_TRUE(part) << part.message();
+  for (std::size_t i = 0; i < part->mesh.vertices.size(); ++i) {
+    ASSERT_LT((part->mesh.vertices[i] - loaded.shape.mesh().vertices[i]).norm(), 1e-12);
+  }
+  EXPECT_EQ(part->report.root_flange, 6);  // the largest flange, the panel's face
+}
+
+TEST(ProducedPart, ClosedHemsStayClosed) {
+  const auto& loaded = loaded_part("openamr-MMP.01.00.00.002_Cover_flange.step");
+  const std::vector<double> sb(loaded.model.segmentation.bends.size(), 2.0);
+  const auto part = make_produced_part(loaded.model, loaded.shape, sb);
+  ASSERT_TRUE(part) << part.message();
+  EXPECT_EQ(part->report.hems.size(), 3u);
+  for (int b : part->report.hems) {
+    const auto& truth = part->bends[static_cast<std::size_t>(b)];
+    EXPECT_EQ(truth.springback_deg, 0.0);
+    EXPECT_EQ(truth.requested_springback_deg, 2.0);
+    // The hem's flange moves exactly with the one it is folded onto.
+    const auto& Tp = part->flange_transforms[static_cast<std::size_t>(truth.parent_flange)];
+    const auto& Tc = part->flange_transforms[static_cast<std::size_t>(truth.child_flange)];
+    EXPECT_LT((Tp.matrix() - Tc.matrix()).norm(), 1e-12);
+  }
+}
+
+TEST(ProducedPart, PositiveSpringbackOpensTheBend) {
+  // The nema bracket: one 90 degree bend with a sharp inner corner. Opening it moves the far
+  // flange away from the root flange's plane side it was bent towards.
+  const auto& loaded = loaded_part("nema-17-bracket.step");
+  const auto& seg = loaded.model.segmentation;
+  ASSERT_EQ(seg.bends.size(), 1u);
+  const auto part = make_produced_part(loaded.model, loaded.shape, {5.0});
+  ASSERT_TRUE(part) << part.message();
+  const auto& truth = part->bends[0];
+  const auto faces = describe_faces(loaded.shape);
+  const Plane a =
+      fit_side(*part, seg.flanges[static_cast<std::size_t>(truth.parent_flange)], faces);
+  const Plane b = fit_side(*part, seg.flanges[static_cast<std::size_t>(truth.child_flange)], faces);
+  EXPECT_NEAR(turn_angle_deg(a, b), 85.0, 1e-9);
+}
+
+TEST(ProducedPart, RejectsBadInput) {
+  const auto& loaded = loaded_part("nema-17-bracket.step");
+  EXPECT_FALSE(make_produced_part(loaded.model, loaded.shape, {}));
+  EXPECT_FALSE(make_produced_part(loaded.model, CadShape{}, {1.0}));
+  ProducedPartSettings bad_root;
+  bad_root.root_flange = 9;
+  EXPECT_FALSE(make_produced_part(loaded.model, loaded.shape, {1.0}, bad_root));
+}
+
+}  // namespace
+}  // namespace springscan::parts
