@@ -415,6 +415,9 @@ Expected<ProducedPart> make_produced_part(const PartModel& model, const CadShape
   });
   const CadMesh& cad = shape.mesh();
   part.mesh = cad;
+  part.cad_mesh = cad;
+  part.faces = faces;
+  part.solid = shape.report().solids > 0;
   std::vector<std::int32_t> vertex_face(cad.vertices.size(), -1);
   for (std::size_t t = 0; t < cad.triangles.size(); ++t) {
     for (auto v : cad.triangles[t]) vertex_face[v] = cad.triangle_faces[t];

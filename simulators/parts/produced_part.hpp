@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "analysis/cad/import.hpp"
+#include "analysis/cad/segmentation.hpp"
 #include "analysis/core/expected.hpp"
 #include "analysis/core/part_model.hpp"
 
@@ -74,6 +75,9 @@ struct ProducedPart {
   std::vector<BendTruth> bends;              ///< per Bend::id
   PointCloud samples;  ///< the model's samples, produced (points, normals, face ids)
   CadMesh mesh;        ///< the tessellation produced: vertices moved, triangles and uv as CAD
+  CadMesh cad_mesh;    ///< the CAD tessellation (a scan snaps its hits to the CAD surface)
+  std::vector<CadFaceInfo> faces;  ///< the CAD faces (describe_faces): type, plane, cylinder
+  bool solid = false;              ///< the shape is a solid: its back faces are never seen
   ProducedPartReport report;
   std::shared_ptr<const ProducedPartData> data;
 
