@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "analysis/cad/internal.hpp"
+#include "analysis/io/file_io.hpp"
 #include "analysis/io/sha256.hpp"
 #include "analysis/messages/cad_model_proto.hpp"
 
@@ -49,32 +50,18 @@ Expected<PartModel> read_cache(const std::string& cache_file, const std::string&
   return model;
 }
 
-// Written to a temporary file and renamed, so a reader never sees half an entry.
+// Through the one atomic writer (fsync, rename, fsync of the folder), so neither a reader nor
+// a power loss ever leaves half an entry.
 std::string write_cache(const std::string& cache_file, const v1::CachedPartModel& message) {
-  const std::string temporary = cache_file + ".tmp";
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out || !message.SerializeToOstream(&out)) return temporary + ": cannot write the cache";
-  }
-  std::error_code ec;
-  std::filesystem::rename(temporary, cache_file, ec);
-  return ec ? cache_file + ": " + ec.message() : std::string();
+  std::string bytes;
+  if (!message.SerializeToString(&bytes)) return cache_file + ": cannot serialize the cache entry";
+  const auto written = write_file_atomically(cache_file, bytes);
+  return written ? std::string() : written.message();
 }
 
 }  // namespace
 
-std::string cache_settings_key(const CadModelSettings& s) {
-  std::ostringstream key;
-  key.precision(17);
-  key << "import " << s.import.sewing_tolerance_mm << ' ' << s.import.sew_loose_faces << ' '
-      << s.import.heal << ' ' << s.import.min_plausible_size_mm << ' '
-      << s.import.linear_deflection_mm << ' ' << s.import.angular_deflection_deg << "; sampling "
-      << s.sampling.sample_count << ' ' << s.sampling.seed << "; segmentation "
-      << s.segmentation.coplanar_angle_deg << ' ' << s.segmentation.coplanar_distance_mm << ' '
-      << s.segmentation.coaxial_distance_mm << ' ' << s.segmentation.same_radius_mm << ' '
-      << s.segmentation.max_sheet_thickness_mm;
-  return key.str();
-}
+std::string cache_settings_key(const CadModelSettings& s) { return model_settings_key(s); }
 
 Expected<PartModel> load_part_model(const std::string& path, const CadModelSettings& settings) {
   auto shape = load_cad(path, settings.import);

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -64,12 +65,20 @@ Expected<bool> write_file_atomically(const std::string& path, std::string_view b
   const std::filesystem::path target(path);
   std::filesystem::path dir = target.parent_path();
   if (dir.empty()) dir = ".";
+  // A unique temporary name (".name.XXXXXX"), so two writers of the same file (the CLI and the
+  // daemon filling one model cache) never write into each other's temporary.
   // Built by append: `"." + name + ".tmp"` trips a g++ 12 -Wrestrict false positive.
   std::string tmp_name(1, '.');
-  tmp_name.append(target.filename().string()).append(".tmp");
-  const std::string tmp = (dir / tmp_name).string();
-  Fd fd(::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
+  tmp_name.append(target.filename().string()).append(".XXXXXX");
+  std::string tmp = (dir / tmp_name).string();
+  Fd fd(::mkostemp(tmp.data(), O_CLOEXEC));
   if (!fd.valid()) return os_error("cannot create", tmp);
+  // mkostemp makes the file 0600; reports and caches are read by the springscan group too.
+  if (::fchmod(fd.get(), 0644) != 0) {
+    Error error = os_error("cannot chmod", tmp);
+    ::unlink(tmp.c_str());
+    return error;
+  }
   const auto abandon = [&](const std::string& what) {
     Error error = os_error(what, tmp);
     fd.close();

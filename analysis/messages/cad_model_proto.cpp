@@ -1,6 +1,11 @@
 #include "analysis/messages/cad_model_proto.hpp"
 
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
 #include <cmath>
+
+#include "analysis/io/sha256.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -110,6 +115,21 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
   return model;
 }
 
+namespace {
+
+// One optional double of ModelSettings onto its C++ field, checked against [lo, hi].
+std::string apply_range(bool present, double value, double lo, double hi, const char* name,
+                        double& target) {
+  if (!present) return {};
+  if (!(value >= lo && value <= hi))
+    return std::string("settings: model.") + name + " = " + std::to_string(value) +
+           " (allowed: " + std::to_string(lo) + " to " + std::to_string(hi) + ")";
+  target = value;
+  return {};
+}
+
+}  // namespace
+
 Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModelSettings settings) {
   if (message.has_sample_count()) {
     if (message.sample_count() < 100 || message.sample_count() > 10'000'000)
@@ -130,7 +150,61 @@ Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModel
                   " (must be in (0, 90))");
     settings.import.angular_deflection_deg = value;
   }
+  CadImportSettings& im = settings.import;
+  CadSegmentationSettings& sg = settings.segmentation;
+  const auto& m = message.segmentation();
+  const std::string bad[] = {
+      apply_range(message.has_sewing_tolerance_mm(), message.sewing_tolerance_mm(), 1e-6, 10.0,
+                  "sewing_tolerance_mm", im.sewing_tolerance_mm),
+      apply_range(message.has_min_plausible_size_mm(), message.min_plausible_size_mm(), 0.0, 1000.0,
+                  "min_plausible_size_mm", im.min_plausible_size_mm),
+      apply_range(m.has_coplanar_angle_deg(), m.coplanar_angle_deg(), 1e-3, 10.0,
+                  "segmentation.coplanar_angle_deg", sg.coplanar_angle_deg),
+      apply_range(m.has_coplanar_distance_mm(), m.coplanar_distance_mm(), 1e-4, 5.0,
+                  "segmentation.coplanar_distance_mm", sg.coplanar_distance_mm),
+      apply_range(m.has_coaxial_distance_mm(), m.coaxial_distance_mm(), 1e-4, 5.0,
+                  "segmentation.coaxial_distance_mm", sg.coaxial_distance_mm),
+      apply_range(m.has_same_radius_mm(), m.same_radius_mm(), 1e-4, 5.0,
+                  "segmentation.same_radius_mm", sg.same_radius_mm),
+      apply_range(m.has_max_sheet_thickness_mm(), m.max_sheet_thickness_mm(), 0.01, 50.0,
+                  "segmentation.max_sheet_thickness_mm", sg.max_sheet_thickness_mm),
+  };
+  for (const std::string& e : bad)
+    if (!e.empty()) return fail(e);
+  if (message.has_sew_loose_faces()) im.sew_loose_faces = message.sew_loose_faces();
+  if (message.has_heal()) im.heal = message.heal();
+  if (message.has_sample_seed()) settings.sampling.seed = message.sample_seed();
   return settings;
+}
+
+v1::ModelSettings to_proto(const CadModelSettings& s) {
+  v1::ModelSettings m;
+  m.set_sample_count(s.sampling.sample_count);
+  m.set_sample_seed(s.sampling.seed);
+  m.set_linear_deflection_mm(s.import.linear_deflection_mm);
+  m.set_angular_deflection_deg(s.import.angular_deflection_deg);
+  m.set_sewing_tolerance_mm(s.import.sewing_tolerance_mm);
+  m.set_sew_loose_faces(s.import.sew_loose_faces);
+  m.set_heal(s.import.heal);
+  m.set_min_plausible_size_mm(s.import.min_plausible_size_mm);
+  auto* g = m.mutable_segmentation();
+  g->set_coplanar_angle_deg(s.segmentation.coplanar_angle_deg);
+  g->set_coplanar_distance_mm(s.segmentation.coplanar_distance_mm);
+  g->set_coaxial_distance_mm(s.segmentation.coaxial_distance_mm);
+  g->set_same_radius_mm(s.segmentation.same_radius_mm);
+  g->set_max_sheet_thickness_mm(s.segmentation.max_sheet_thickness_mm);
+  return m;
+}
+
+std::string model_settings_key(const CadModelSettings& settings) {
+  std::string bytes;
+  {
+    google::protobuf::io::StringOutputStream stream(&bytes);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    to_proto(settings).SerializeToCodedStream(&coded);
+  }
+  return "model-settings-sha256:" + sha256_hex(bytes);
 }
 
 }  // namespace springscan::analysis

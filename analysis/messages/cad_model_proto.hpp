@@ -28,4 +28,12 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message);
 Expected<CadModelSettings> from_proto(const v1::ModelSettings& message,
                                       CadModelSettings settings = {});
 
+/// Every value of `settings` that shapes the cached model (import, sampling, segmentation; not
+/// the distance queries, which are rebuilt on load), each field set: what the cache key hashes.
+v1::ModelSettings to_proto(const CadModelSettings& settings);
+
+/// The model cache's settings key: the SHA-256 of to_proto(settings) serialized
+/// deterministically, so any setting added to v1::ModelSettings invalidates older entries.
+std::string model_settings_key(const CadModelSettings& settings);
+
 }  // namespace springscan::analysis

@@ -4,8 +4,11 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <set>
 
 #include "analysis/io/sha256.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
 #include "simulators/parts/cad_profile.hpp"
 #include "tests/analysis/cad_test_util.hpp"
 
@@ -124,6 +127,44 @@ TEST(CadModel, CacheHitMissAndInvalidation) {
   ASSERT_TRUE(after_corruption) << after_corruption.message();
   EXPECT_FALSE(after_corruption->cache_hit);
   EXPECT_TRUE(load_part_model_cached(part, cache, settings)->cache_hit);
+}
+
+}  // namespace
+}  // namespace springscan::analysis
+
+namespace springscan::analysis {
+namespace {
+
+// The cache key hashes every value that shapes a model: any change gives a new key, the same
+// values the same key, and the settings survive the trip through their message.
+TEST(CadModel, CacheKeyChangesWithEverySetting) {
+  const CadModelSettings base;
+  const std::string key = cache_settings_key(base);
+  EXPECT_EQ(cache_settings_key(CadModelSettings{}), key);
+  const std::vector<std::function<void(CadModelSettings&)>> changes = {
+      [](CadModelSettings& s) { s.sampling.sample_count += 1; },
+      [](CadModelSettings& s) { s.sampling.seed += 1; },
+      [](CadModelSettings& s) { s.import.linear_deflection_mm *= 2; },
+      [](CadModelSettings& s) { s.import.angular_deflection_deg += 1; },
+      [](CadModelSettings& s) { s.import.sewing_tolerance_mm *= 2; },
+      [](CadModelSettings& s) { s.import.sew_loose_faces = !s.import.sew_loose_faces; },
+      [](CadModelSettings& s) { s.import.heal = !s.import.heal; },
+      [](CadModelSettings& s) { s.import.min_plausible_size_mm += 1; },
+      [](CadModelSettings& s) { s.segmentation.coplanar_angle_deg *= 2; },
+      [](CadModelSettings& s) { s.segmentation.coplanar_distance_mm *= 2; },
+      [](CadModelSettings& s) { s.segmentation.coaxial_distance_mm *= 2; },
+      [](CadModelSettings& s) { s.segmentation.same_radius_mm *= 2; },
+      [](CadModelSettings& s) { s.segmentation.max_sheet_thickness_mm += 1; },
+  };
+  std::set<std::string> keys = {key};
+  for (std::size_t i = 0; i < changes.size(); ++i) {
+    CadModelSettings changed = base;
+    changes[i](changed);
+    EXPECT_TRUE(keys.insert(cache_settings_key(changed)).second) << "change " << i;
+    auto back = from_proto(to_proto(changed));
+    ASSERT_TRUE(back.ok()) << back.message();
+    EXPECT_EQ(cache_settings_key(*back), cache_settings_key(changed)) << "change " << i;
+  }
 }
 
 }  // namespace
