@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 
+#include "analysis/cad/sampling.hpp"
 #include "analysis/cad/segmentation.hpp"
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
@@ -153,6 +154,19 @@ void index_regions(const PartModel& model, const std::vector<CadFaceInfo>& faces
 }
 
 }  // namespace
+
+Expected<CadPart> load_cad_part(const std::string& path, const CadModelSettings& settings) {
+  auto shape = load_cad(path, settings.import);
+  if (!shape) return shape.error();
+  CadPart part;
+  part.shape = *shape;
+  auto samples = sample_cad(part.shape, settings.sampling);
+  if (!samples) return samples.error();
+  part.model.samples = std::move(*samples);
+  part.model.segmentation = segment_cad(part.shape, settings.segmentation);
+  part.model.face_count = part.shape.face_count();
+  return part;
+}
 
 Expected<ProducedPart> make_produced_part(const PartModel& model, const CadShape& shape,
                                           const std::vector<double>& springback_deg,

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "analysis/cad/import.hpp"
+#include "analysis/cad/model.hpp"
 #include "analysis/cad/segmentation.hpp"
 #include "analysis/core/expected.hpp"
 #include "analysis/core/part_model.hpp"
@@ -88,6 +89,16 @@ struct ProducedPart {
   /// The rigid motion of the material at that point (rotate CAD normals by its linear part).
   Transform local_transform(const Vec3& cad_point, int face_id) const;
 };
+
+/// A CAD part as make_produced_part needs it: the shape and its PartModel.
+struct CadPart {
+  CadShape shape;
+  PartModel model;  ///< samples, segmentation and face count (no exact distance)
+};
+
+/// Loads `path` once and builds the model from that shape with the same settings as
+/// load_part_model (samples, segmentation), without its exact-distance index.
+Expected<CadPart> load_cad_part(const std::string& path, const CadModelSettings& settings = {});
 
 /// The part `model` (segmented; samples with face ids) of `shape` (its tessellation and face
 /// adjacency) with springback_deg[i] at bend i (Bend::id). Errors: the shape's face count differs

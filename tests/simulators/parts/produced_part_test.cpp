@@ -223,6 +223,19 @@ TEST(ProducedPart, PositiveSpringbackOpensTheBend) {
   EXPECT_NEAR(turn_angle_deg(a, b), 85.0, 1e-9);
 }
 
+TEST(ProducedPart, LoadCadPartSegmentsAsLoadPartModel) {
+  const auto path = analysis::testing::shared_cad("nema-17-bracket.step");
+  const auto part = load_cad_part(path);
+  const auto model = load_part_model(path);
+  ASSERT_TRUE(part && model);
+  EXPECT_EQ(part->model.face_count, model->face_count);
+  EXPECT_EQ(part->model.samples.size(), model->samples.size());
+  ASSERT_EQ(part->model.segmentation.bends.size(), model->segmentation.bends.size());
+  EXPECT_EQ(part->model.segmentation.bends[0].nominal_angle_deg,
+            model->segmentation.bends[0].nominal_angle_deg);
+  EXPECT_FALSE(load_cad_part(path + ".missing"));
+}
+
 TEST(ProducedPart, RejectsBadInput) {
   const auto& loaded = loaded_part("nema-17-bracket.step");
   EXPECT_FALSE(make_produced_part(loaded.model, loaded.shape, {}));

@@ -8,18 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "analysis/cad/import.hpp"
-#include "analysis/cad/sampling.hpp"
-#include "analysis/cad/segmentation.hpp"
-#include "analysis/core/part_model.hpp"
+#include "simulators/parts/produced_part.hpp"
 #include "tests/analysis/cad_test_util.hpp"
 
 namespace springscan::parts::testing {
 
-struct LoadedPart {
-  analysis::CadShape shape;
-  analysis::PartModel model;
-};
+using LoadedPart = CadPart;
 
 inline const std::vector<std::string>& production_parts() {
   static const std::vector<std::string> names = {
@@ -34,18 +28,9 @@ inline const LoadedPart& loaded_part(const std::string& name) {
   static std::map<std::string, LoadedPart> cache;
   auto it = cache.find(name);
   if (it != cache.end()) return it->second;
-  LoadedPart part;
-  auto shape = analysis::load_cad(analysis::testing::shared_cad(name));
-  EXPECT_TRUE(shape) << name << ": " << shape.message();
-  if (shape) {
-    part.shape = *shape;
-    auto samples = analysis::sample_cad(part.shape);
-    EXPECT_TRUE(samples) << samples.message();
-    if (samples) part.model.samples = std::move(*samples);
-    part.model.segmentation = analysis::segment_cad(part.shape);
-    part.model.face_count = part.shape.face_count();
-  }
-  return cache.emplace(name, std::move(part)).first->second;
+  auto part = load_cad_part(analysis::testing::shared_cad(name));
+  EXPECT_TRUE(part) << name << ": " << part.message();
+  return cache.emplace(name, part ? std::move(*part) : CadPart{}).first->second;
 }
 
 }  // namespace springscan::parts::testing
