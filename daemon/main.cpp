@@ -1,6 +1,6 @@
 // springscand: the station daemon (DESIGN.md "The daemon"). The composition root: load the
 // config, build the scanner and the analysis, run the station until SIGTERM.
-//   springscand --config FILE [--check]
+//   springscand --config FILE [--check] | --help | --version
 #include <signal.h>
 #include <systemd/sd-daemon.h>
 #include <unistd.h>
@@ -38,8 +38,18 @@ void install_signal_handlers() {
   signal(SIGPIPE, SIG_IGN);
 }
 
-int usage(const char* message) {
-  std::fprintf(stderr, "springscand: %s\nusage: springscand --config FILE [--check]\n", message);
+constexpr const char* kUsage =
+    "usage: springscand --config FILE [--check]\n"
+    "       springscand --help | --version\n"
+    "  --config FILE  the station config (protobuf text format; see the commented\n"
+    "                 /etc/springscan/springscand.textproto)\n"
+    "  --check        validate the config and exit: 0 when it is usable, 2 with the first\n"
+    "                 problem (file:line) otherwise\n"
+    "Runs the inspection station: Modbus TCP for the PLC, the USB scanner, the analysis.\n"
+    "Exit codes: 0 clean stop, 1 could not start or stop was forced, 2 bad usage or config.\n";
+
+int usage(const std::string& message) {
+  std::fprintf(stderr, "springscand: %s\n%s", message.c_str(), kUsage);
   return 2;
 }
 
@@ -54,8 +64,14 @@ int main(int argc, char** argv) {
       config_path = argv[++i];
     } else if (std::strcmp(argv[i], "--check") == 0) {
       check_only = true;
+    } else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    } else if (std::strcmp(argv[i], "--version") == 0) {
+      std::printf("springscand %s\n", SPRINGSCAN_VERSION);
+      return 0;
     } else {
-      return usage((std::string("unknown argument ") + argv[i]).c_str());
+      return usage(std::string("unknown argument ") + argv[i]);
     }
   }
   if (config_path.empty()) return usage("--config FILE is required");
@@ -83,9 +99,12 @@ int main(int argc, char** argv) {
   (*station)->run(g_stop);
   std::thread([&log] {
     std::this_thread::sleep_for(kStopBound);
-    log.warning("shutdown: the analysis still runs after " + std::to_string(kStopBound.count()) +
-                " s; exiting without its result");
-    _exit(0);
+    // Non-zero, so systemd (and a technician reading `systemctl status`) can tell a forced
+    // stop from a clean one.
+    log.error("shutdown forced: the analysis still ran after " +
+              std::to_string(kStopBound.count()) +
+              " s; exiting with status 1 without its result (nothing was reported to the PLC)");
+    _exit(1);
   }).detach();
   station->reset();  // cancels a running scan, waits for the runner
   log.info("springscand stopped");
