@@ -89,7 +89,7 @@ int write_surface(const DemoOptions& options) {
 }
 
 void write_vec(std::ostream& out, const Vec3& v) {
-  out << '[' << v.x() << ", " << v.y() << ", " << v.z() << ']';
+  out << '[' << v.x() + 0.0 << ", " << v.y() + 0.0 << ", " << v.z() + 0.0 << ']';  // no "-0"
 }
 
 void write_transform(std::ostream& out, const Transform& T) {

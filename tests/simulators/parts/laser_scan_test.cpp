@@ -85,6 +85,41 @@ TEST(LaserScan, FromTheBottomSeesTheOtherSide) {
   }
 }
 
+// Every production part, scanned from the top and from the bottom: each side sees only flange
+// faces facing it, the two sides see disjoint faces, and every true normal faces the scanner.
+class ScanBothSides : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ScanBothSides, EachSideSeesOnlyItsFaces) {
+  const auto& model = loaded_part(GetParam()).model;
+  const ProducedPart part = produce(GetParam(), 1.0);
+  std::set<int> seen[2];
+  for (int side = 0; side < 2; ++side) {
+    LaserScanSettings settings;
+    settings.view_direction = Vec3(0.0, 0.0, side == 0 ? -1.0 : 1.0);
+    settings.point_count = 60000;
+    const auto scan = laser_scan(part, settings);
+    ASSERT_TRUE(scan) << scan.message();
+    EXPECT_NEAR(static_cast<double>(scan->cloud.size()), 60000.0, 6000.0);
+    const auto away = facing_flange_faces(part, model, settings.view_direction, false);
+    for (int f : scan->cloud.face_ids) ASSERT_EQ(away.count(f), 0u) << "face " << f;
+    for (const auto& n : scan->cloud.normals) ASSERT_LT(n.dot(settings.view_direction), 0.0);
+    seen[side] = flange_faces_hit(*scan, model);
+    EXPECT_FALSE(seen[side].empty());
+  }
+  for (int f : seen[0]) EXPECT_EQ(seen[1].count(f), 0u) << "face " << f << " seen from both sides";
+}
+
+INSTANTIATE_TEST_SUITE_P(ProductionParts, ScanBothSides,
+                         ::testing::ValuesIn(testing::production_parts()),
+                         [](const auto& param_info) {
+                           std::string name =
+                               param_info.param.substr(0, param_info.param.rfind('.'));
+                           if (name.rfind("openamr", 0) == 0)
+                             name = name.substr(name.find('_') + 1);
+                           std::replace(name.begin(), name.end(), '-', '_');
+                           return name;
+                         });
+
 // Möller-Trumbore: does the ray from `o` along `d` meet triangle (a, b, c) beyond `t_min`?
 bool ray_hits(const Vec3& o, const Vec3& d, const Vec3& a, const Vec3& b, const Vec3& c,
               double t_min) {
