@@ -336,6 +336,29 @@ TEST(ProducedPart, LoadCadPartSegmentsAsLoadPartModel) {
   EXPECT_FALSE(load_cad_part(path + ".missing"));
 }
 
+// A cycle of the flange graph: bend 0 of the motor bracket listed twice. The copy is reached
+// second, finds both flanges placed, gets no springback of its own and says how far off it is.
+TEST(ProducedPart, ClosingBendOfACycleIsReported) {
+  const auto& loaded = loaded_part("openamr-MMP.03.00.00.003_Motor_bracket.step");
+  PartModel model = loaded.model;
+  Bend copy = model.segmentation.bends[0];
+  copy.id = static_cast<int>(model.segmentation.bends.size());
+  copy.face_ids.clear();
+  model.segmentation.bends.push_back(copy);
+  std::vector<double> sb(model.segmentation.bends.size(), 1.0);
+  sb[0] = 2.0;
+  sb.back() = 0.5;
+  const auto part = make_produced_part(model, loaded.shape, sb);
+  ASSERT_TRUE(part) << part.message();
+  ASSERT_EQ(part->report.closing_bends, std::vector<int>{copy.id});
+  const BendTruth& closing = part->bends.back();
+  EXPECT_TRUE(closing.closes_cycle);
+  EXPECT_EQ(closing.springback_deg, 0.0);
+  EXPECT_NEAR(closing.produced_angle_deg, 88.0, 1e-9);  // as bend 0 made it
+  EXPECT_NEAR(closing.cycle_error_deg, 88.0 - 89.5, 1e-9);
+  EXPECT_FALSE(part->bends[0].closes_cycle);
+}
+
 TEST(ProducedPart, RejectsBadInput) {
   const auto& loaded = loaded_part("nema-17-bracket.step");
   EXPECT_FALSE(make_produced_part(loaded.model, loaded.shape, {}));
