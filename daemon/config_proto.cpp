@@ -154,8 +154,8 @@ std::string apply_modbus(const v1::ModbusConfig& m, const Locator& at, DaemonSet
     s.max_connections = m.max_connections();
   }
   if (m.has_max_connections_per_address()) {
-    if (!(e = out_of_range(at, path("max_connections_per_address"),
-                           m.max_connections_per_address(), 0, 16))
+    if (!(e = out_of_range(at, path("max_connections_per_address"), m.max_connections_per_address(),
+                           0, 16))
              .empty()) {
       return e;
     }

@@ -9,7 +9,7 @@ namespace springscan::analysis {
 
 struct FlangeTable {
   std::vector<Flange> flanges;
-  std::vector<int> flange_of_face;   ///< -1 for faces in no flange
+  std::vector<int> flange_of_face;  ///< -1 for faces in no flange
 };
 
 FlangeTable find_flanges(const CadShape& shape, const std::vector<CadFaceInfo>& infos, bool solid,
