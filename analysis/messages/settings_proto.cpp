@@ -70,38 +70,15 @@ std::optional<Error> icp_from_proto(const v1::RegistrationSettings& m, IcpSettin
     s.kernel = m.robust_kernel() == M::HUBER   ? RobustKernel::kHuber
                : m.robust_kernel() == M::TUKEY ? RobustKernel::kTukey
                                                : RobustKernel::kNone;
-  if (m.has_max_iterations()) {
-    if (m.max_iterations() < 0 || m.max_iterations() > 10000)
-      return bad("registration.max_iterations", m.max_iterations(), "0 to 10000");
-    s.max_iterations = m.max_iterations();
-  }
-  if (m.has_max_correspondence_distance_mm()) {
-    if (!in_range(m.max_correspondence_distance_mm(), 0.0, 1e9))
-      return bad("registration.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
-                 ">= 0; 0 = no limit");
+  if (m.has_max_iterations()) s.max_iterations = m.max_iterations();
+  if (m.has_max_correspondence_distance_mm())
     s.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
-  }
-  if (m.has_trimmed_fraction()) {
-    if (!in_range(m.trimmed_fraction(), 0.0, 0.99))
-      return bad("registration.trimmed_fraction", m.trimmed_fraction(), "0 to 0.99");
-    s.trimmed_fraction = m.trimmed_fraction();
-  }
-  if (m.has_kernel_scale_mm()) {
-    if (!in_range(m.kernel_scale_mm(), 1e-9, 1e9))
-      return bad("registration.kernel_scale_mm", m.kernel_scale_mm(), "must be > 0");
-    s.kernel_scale_mm = m.kernel_scale_mm();
-  }
-  if (m.has_min_error_mm()) {
-    if (!in_range(m.min_error_mm(), 0.0, 1e9))
-      return bad("registration.min_error_mm", m.min_error_mm(), ">= 0");
-    s.min_error_mm = m.min_error_mm();
-  }
-  if (m.has_error_ratio_stop()) {
-    if (!in_range(m.error_ratio_stop(), 0.0, 1.0))
-      return bad("registration.error_ratio_stop", m.error_ratio_stop(), "0 to 1");
-    s.error_ratio_stop = m.error_ratio_stop();
-  }
-  return std::nullopt;
+  if (m.has_trimmed_fraction()) s.trimmed_fraction = m.trimmed_fraction();
+  if (m.has_kernel_scale_mm()) s.kernel_scale_mm = m.kernel_scale_mm();
+  if (m.has_min_error_mm()) s.min_error_mm = m.min_error_mm();
+  if (m.has_error_ratio_stop()) s.error_ratio_stop = m.error_ratio_stop();
+  // The ranges are the engine's, checked in one place (analysis/registration/icp.hpp).
+  return validate(s, "settings: registration.");
 }
 
 }  // namespace
@@ -130,18 +107,17 @@ Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& m) {
       return bad("local_fit.bend_margin_mm", m.bend_margin_mm(), "0 to 1000");
     s.bend_margin_mm = m.bend_margin_mm();
   }
-  if (m.has_max_iterations()) {
-    if (m.max_iterations() < 1 || m.max_iterations() > 10000)
-      return bad("local_fit.max_iterations", m.max_iterations(), "1 to 10000");
-    s.local_fit.max_iterations = m.max_iterations();
-  }
+  if (m.has_max_iterations()) s.local_fit.max_iterations = m.max_iterations();
   if (m.has_max_correspondence_distance_mm()) {
-    if (!in_range(m.max_correspondence_distance_mm(), 1e-6, 1e6))
+    // The same distance assigns scan points to flanges, so 0 (the engine's "no limit") is
+    // refused here; the upper bound is the engine's (validate below).
+    if (!(m.max_correspondence_distance_mm() > 0.0))
       return bad("local_fit.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
-                 "must be > 0");
+                 "must be > 0: it is also the flange assignment distance");
     s.local_fit.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
     s.assignment_distance_mm = m.max_correspondence_distance_mm();
   }
+  if (auto error = validate(s.local_fit, "settings: local_fit.")) return *error;
   return s;
 }
 

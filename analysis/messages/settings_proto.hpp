@@ -20,15 +20,16 @@ Expected<NormalSettings> from_proto(const v1::NormalSettings& message);
 /// reduction.kcenter_radius_mm (> 0), kcenter_count (0..10^7), voxel_size_mm (>= 0, 0 = auto),
 /// min_curvature (>= 0).
 Expected<ReductionSettings> from_proto(const v1::ReductionSettings& message);
-/// registration.*: method, max_iterations (0..10000), max_correspondence_distance_mm (>= 0),
-/// trimmed_fraction ([0, 1)), robust_kernel, kernel_scale_mm (> 0), min_error_mm (>= 0),
-/// error_ratio_stop ([0, 1]), pca_initial_alignment.
+/// registration.*: method, max_iterations, max_correspondence_distance_mm, trimmed_fraction,
+/// robust_kernel, kernel_scale_mm, min_error_mm, error_ratio_stop (0 = off),
+/// pca_initial_alignment; the ranges are validate(IcpSettings)'s (analysis/registration/icp.hpp).
 Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& message);
 /// deviation.tolerance_mm (> 0).
 Expected<DeviationSettings> from_proto(const v1::DeviationSettings& message);
-/// local_fit.bend_margin_mm (0 to 1000), max_iterations (1 to 10000),
-/// max_correspondence_distance_mm (> 0; also the distance up to which scan points are
-/// assigned to flanges). The angle tolerance comes from verdict.angle_tolerance_deg.
+/// local_fit.bend_margin_mm (0 to 1000), max_iterations, max_correspondence_distance_mm (> 0;
+/// also the distance up to which scan points are assigned to flanges); the ranges otherwise
+/// are validate(LocalFitSettings)'s, i.e. the ICP engine's. The angle tolerance comes from
+/// verdict.angle_tolerance_deg.
 Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& message);
 /// threads (0..1024; 0 = all cores).
 Expected<int> threads_from_proto(const v1::AnalysisSettings& message);

@@ -12,6 +12,15 @@
 namespace springscan::analysis {
 namespace {
 
+// The coarse model stands in for the full one in the candidate scores only when it keeps the
+// part's shape: at least this many voxels (the screening round samples 250 scan points) ...
+constexpr std::size_t kMinCoarseModelPoints = 100;
+// ... and when it is small enough to pay for its own k-d tree: at most this share of the samples.
+constexpr double kMaxCoarseModelShare = 0.5;
+// A scan whose least principal variance is below this share of its largest is flat: only its
+// outline fixes the in-plane placement.
+constexpr double kFlatEigenvalueRatio = 1e-8;
+
 struct CoarseModel {
   std::unique_ptr<KdTree> tree;  // null: use the full model
   std::vector<Vec3> normals;
@@ -25,11 +34,24 @@ CoarseModel coarse_model(const KdTree& tree, const std::vector<Vec3>& normals, d
   const double voxel = (hi - lo).norm() / divisions;
   if (!(voxel > 0.0)) return out;
   auto reduced = voxel_reduce(cloud, {voxel});
-  if (!reduced || reduced->cloud.size() < 100 || reduced->cloud.size() * 2 > tree.size())
+  if (!reduced || reduced->cloud.size() < kMinCoarseModelPoints ||
+      static_cast<double>(reduced->cloud.size()) >
+          kMaxCoarseModelShare * static_cast<double>(tree.size()))
     return out;
   out.normals = std::move(reduced->cloud.normals);
   out.tree = std::make_unique<KdTree>(std::move(reduced->cloud.points));
   return out;
+}
+
+// The fit's own settings (the ICP's are checked by icp()).
+std::optional<Error> check_settings(const GlobalFitSettings& s) {
+  if (!(s.symmetry_warning_ratio >= 0.0 && s.symmetry_warning_ratio <= 1.0))
+    return fail("global fit: symmetry_warning_ratio = " + std::to_string(s.symmetry_warning_ratio) +
+                ": must be in [0, 1]");
+  if (!(s.pca.distinct_pose_deg >= 0.0 && s.pca.distinct_pose_deg <= 180.0))
+    return fail("global fit: pca.distinct_pose_deg = " + std::to_string(s.pca.distinct_pose_deg) +
+                ": must be in [0, 180]");
+  return std::nullopt;
 }
 
 // The rms before and after the PCA alignment are figures for the report, taken where the scan
@@ -46,8 +68,8 @@ double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
   parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) d2[i] = tree.nearest(T * points[i])->squared_distance;
   });
-  const auto drop = static_cast<std::size_t>(std::clamp(trimmed_fraction, 0.0, 0.99) *
-                                             static_cast<double>(d2.size()));
+  const auto drop = static_cast<std::size_t>(
+      std::clamp(trimmed_fraction, 0.0, kMaxTrimmedFraction) * static_cast<double>(d2.size()));
   const auto keep = d2.size() - drop;
   if (drop > 0)
     std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(keep - 1), d2.end());
@@ -59,6 +81,7 @@ double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
 Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree& model_tree,
                                      const std::vector<Vec3>& model_normals,
                                      const GlobalFitSettings& settings) {
+  if (auto error = check_settings(settings)) return *error;
   if (scan.empty()) return fail("global fit: the scan is empty");
   if (model_tree.empty()) return fail("global fit: the model is empty");
   if (!all_finite(scan)) return fail("global fit: the scan has non-finite (NaN/inf) coordinates");
@@ -83,7 +106,7 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
     start = result.pca.T_target_source;
     result.rms_after_pca_mm =
         rms_nearest_distance(diagnostic, result.pca.T_pca, model_tree, trim, threads);
-    if (result.pca.ambiguity > 0.9) {
+    if (result.pca.ambiguity > settings.symmetry_warning_ratio) {
       std::ostringstream text;
       text << "global fit: the part looks nearly symmetric (best/next distinct PCA candidate "
               "error ratio "
@@ -101,7 +124,7 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
   // A flat scan fixes only its normal offset and tilt by the surface; in-plane placement then
   // rests on the outline (PCA) alone, even when ICP had nothing left to solve.
   const auto frame = principal_frame(scan);
-  const bool flat = frame && frame->eigenvalues(2) <= 1e-8 * frame->eigenvalues(0);
+  const bool flat = frame && frame->eigenvalues(2) <= kFlatEigenvalueRatio * frame->eigenvalues(0);
   if (result.icp.degenerate || flat)
     result.warnings.push_back(
         "global fit: the surface does not constrain every motion (e.g. a flat or cylindrical "

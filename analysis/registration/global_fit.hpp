@@ -14,11 +14,14 @@
 namespace springscan::analysis {
 
 struct GlobalFitSettings {
-  bool pca_initial_alignment = true;   ///< false: ICP starts from the identity (pre-aligned data)
-  PcaAlignSettings pca;                ///< candidate search
-  double pca_model_divisions = 100.0;  ///< candidates are scored on the model voxel-reduced to
-                                       ///< its box diagonal / this (0: the full model)
-  IcpSettings icp;                     ///< the final ICP
+  bool pca_initial_alignment = true;    ///< false: ICP starts from the identity (pre-aligned data)
+  PcaAlignSettings pca;                 ///< candidate search
+  double pca_model_divisions = 100.0;   ///< candidates are scored on the model voxel-reduced to
+                                        ///< its box diagonal / this (0: the full model)
+  double symmetry_warning_ratio = 0.9;  ///< warn of a nearly symmetric part when the best PCA
+                                        ///< candidate's score / the next distinct one's exceeds
+                                        ///< this (PcaAlignResult::ambiguity), (0, 1]
+  IcpSettings icp;                      ///< the final ICP
 };
 
 struct GlobalFitResult {

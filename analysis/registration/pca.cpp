@@ -13,8 +13,17 @@ namespace springscan::analysis {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kDistinctPoseRad = 5.0 * kPi / 180.0;
+constexpr double kRadPerDeg = kPi / 180.0;
 constexpr double kQuarterTurnRad = kPi / 2.0;
+// The robust box of a cloud runs from this quantile to 1 - this along each axis, so that a few
+// outliers cannot make a partial scan look as long as the model.
+constexpr double kExtentQuantile = 0.01;
+// A candidate keeps the sheet normal when it maps the source's least-variance axis within 60
+// degrees of the target's; signed permutations give |cos| = 0 or 1, so any value in (0, 1) works.
+constexpr double kKeepsNormalCos = 0.5;
+// The second variance below this share of the first: the points lie on a line, whose rotation
+// about itself no PCA can fix.
+constexpr double kCollinearEigenvalueRatio = 1e-10;
 
 // The robust error of a candidate: mean squared nearest distance, the worst share left out.
 double trimmed_score(const std::vector<Vec3>& sample, const Transform& T, const KdTree& target,
@@ -51,8 +60,10 @@ struct Refiner {
 };
 
 // The lowest score wins (lowest index on ties). Ambiguity compares only with candidates that
-// ended in a different pose (> 5 degrees away): starts converging to the same pose agree.
-void pick_best(const std::vector<Transform>& poses, PcaAlignResult& result) {
+// ended in a different pose (more than distinct_pose_deg away): starts converging to the same
+// pose agree.
+void pick_best(const std::vector<Transform>& poses, double distinct_pose_deg,
+               PcaAlignResult& result) {
   const auto& scores = result.candidate_scores;
   result.best_candidate = 0;
   for (std::size_t i = 1; i < scores.size(); ++i)
@@ -61,7 +72,7 @@ void pick_best(const std::vector<Transform>& poses, PcaAlignResult& result) {
   double second = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < scores.size(); ++i) {
     const double apart = Eigen::AngleAxisd(poses[i].linear() * best_rotation.transpose()).angle();
-    if (apart > kDistinctPoseRad) second = std::min(second, scores[i]);
+    if (apart > distinct_pose_deg * kRadPerDeg) second = std::min(second, scores[i]);
   }
   result.ambiguity = second > 0.0 ? scores[result.best_candidate] / second : 1.0;
 }
@@ -73,7 +84,8 @@ std::pair<Vec3, Vec3> extent_along(const std::vector<Vec3>& points, const Mat3& 
   const Mat3 project = axes.transpose() * rotation;
   Vec3 lo, hi;
   std::vector<double> along(points.size());
-  const auto low_rank = static_cast<std::ptrdiff_t>(0.01 * static_cast<double>(points.size()));
+  const auto low_rank =
+      static_cast<std::ptrdiff_t>(kExtentQuantile * static_cast<double>(points.size()));
   const auto high_rank = static_cast<std::ptrdiff_t>(points.size()) - 1 - low_rank;
   for (int k = 0; k < 3; ++k) {
     for (std::size_t i = 0; i < points.size(); ++i) along[i] = project.row(k).dot(points[i]);
@@ -132,7 +144,7 @@ Expected<PrincipalFrame> principal_frame(const std::vector<Vec3>& points) {
   if (frame.axes.determinant() < 0.0) frame.axes.col(2) = -frame.axes.col(2);
   if (!(frame.eigenvalues(0) > 0.0))
     return fail("pca: all " + std::to_string(points.size()) + " points coincide");
-  if (frame.eigenvalues(1) <= 1e-10 * frame.eigenvalues(0))
+  if (frame.eigenvalues(1) <= kCollinearEigenvalueRatio * frame.eigenvalues(0))
     return fail("pca: all points lie on one line; a rotation about it is undetermined");
   return frame;
 }
@@ -155,7 +167,7 @@ std::vector<Mat3> pca_rotation_candidates(const PrincipalFrame& source,
   for (int j = 1; j < in_plane_steps; ++j) {
     const Mat3 turn = Eigen::AngleAxisd(kQuarterTurnRad * j / in_plane_steps, normal).matrix();
     for (std::size_t i = 0; i < proper; ++i)
-      if (std::abs(normal.dot(candidates[i] * source.axes.col(2))) > 0.5)
+      if (std::abs(normal.dot(candidates[i] * source.axes.col(2))) > kKeepsNormalCos)
         candidates.push_back(turn * candidates[i]);
   }
   return candidates;
@@ -177,7 +189,7 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
       target_normals.size() == target.size() ? IcpMethod::kPointToPlane : IcpMethod::kPointToPoint;
   refiner.icp_settings.trimmed_fraction = settings.refine_trimmed_fraction;
   refiner.icp_settings.kernel = RobustKernel::kNone;
-  refiner.icp_settings.error_ratio_stop = 1.0;  // a short fixed budget: run all iterations
+  refiner.icp_settings.error_ratio_stop = 1.0;  // a short fixed budget: only a rise ends it early
   refiner.icp_settings.threads = 1;             // parallel over candidates instead
   const auto target_box = extent_along(target.points(), target_frame->axes);
   std::vector<Transform> starts;
@@ -207,7 +219,7 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
     order.resize(std::min(order.size(), keep));
     refiner.run(sample, order, iterations, refined, result.candidate_scores);
   }
-  pick_best(refined, result);
+  pick_best(refined, settings.distinct_pose_deg, result);
   result.T_target_source = refined[result.best_candidate];
   result.T_pca = starts[result.best_candidate];
   return result;

@@ -45,6 +45,9 @@ struct PcaAlignSettings {
   std::size_t survivors = 16;              ///< best starts of the first round refined further
   std::size_t finalists = 4;               ///< best candidates refined further, then rescored
   int finalist_iterations = 30;            ///< ICP updates per finalist (partial scans start far)
+  double distinct_pose_deg = 5.0;          ///< candidates that ended farther apart than this are
+                                           ///< different poses (for the ambiguity); nearer ones
+                                           ///< converged to the same pose
   int threads = 0;                         ///< candidates refined in parallel, 0 = all cores
 };
 

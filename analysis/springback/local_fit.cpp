@@ -1,9 +1,8 @@
 #include "analysis/springback/local_fit.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <numbers>
+#include <limits>
 #include <string>
 
 #include "analysis/core/parallel.hpp"
@@ -11,136 +10,46 @@
 namespace springscan::analysis {
 namespace {
 
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
-constexpr std::size_t kBlock = 4096;
-constexpr double kDegToRad = std::numbers::pi / 180.0;
+// The fewest pairs a local fit solves with: three planes fix the determined directions of a
+// flange (its offset and tilt); the engine holds the rest.
+constexpr int kMinLocalPairs = 3;
 
-// One pair: the tangent plane n . x = offset of the model point found for a scan point.
-struct Pair {
-  Vec3 normal = Vec3::Zero();
-  double offset = 0.0;
-  bool valid = false;
-};
+// Pairs with the exact foot on the CAD surface (PartModel::distance) within the limit
+// (0 = no limit, as for IcpSettings).
+IcpPairSearch exact_surface_pairs(const PartModel& model, double max_distance_mm) {
+  const double limit =
+      max_distance_mm > 0.0 ? max_distance_mm : std::numeric_limits<double>::infinity();
+  return [&model, limit](const std::vector<Vec3>& source, const Transform& T, std::size_t begin,
+                         std::size_t end, std::vector<IcpPair>& pairs) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3 p = T * source[i];
+      const SurfaceHit hit = model.distance->closest(p);
+      const double d2 = (p - hit.foot).squaredNorm();
+      pairs[i] = {hit.foot, hit.normal, d2, std::sqrt(d2) <= limit};
+    }
+  };
+}
 
-Pair find_pair(const LocalFitTarget& target, const Vec3& p, const LocalFitSettings& st) {
+std::optional<Error> check_inputs(const LocalFitTarget& target, const PointCloud& scan,
+                                  const std::vector<std::uint32_t>& indices,
+                                  const LocalFitSettings& st) {
   const PartModel& model = target.model();
-  if (st.correspondence == LocalFitCorrespondence::kExactSurface) {
-    const SurfaceHit hit = model.distance->closest(p);
-    if ((p - hit.foot).norm() > st.max_correspondence_distance_mm) return {};
-    return {hit.normal, hit.normal.dot(hit.foot), true};
+  if (auto error = validate(st)) return error;
+  if (indices.size() < static_cast<std::size_t>(st.min_points))
+    return fail("local_fit: subset has " + std::to_string(indices.size()) +
+                " points, fewer than min_points " + std::to_string(st.min_points));
+  if (model.samples.empty() || model.samples.normals.size() != model.samples.size())
+    return fail("local_fit: the model samples have no normals");
+  if (st.correspondence == LocalFitCorrespondence::kExactSurface && !model.distance)
+    return fail("local_fit: kExactSurface needs PartModel::distance");
+  for (std::uint32_t i : indices) {
+    if (i >= scan.size())
+      return fail("local_fit: index " + std::to_string(i) + " outside the scan of " +
+                  std::to_string(scan.size()) + " points");
+    if (!scan.points[i].allFinite())
+      return fail("local_fit: point " + std::to_string(i) + " is not finite");
   }
-  const auto nn = target.tree().nearest(p, st.max_correspondence_distance_mm);
-  if (!nn) return {};
-  const Vec3& n = model.samples.normals[nn->index];
-  return {n, n.dot(model.samples.points[nn->index]), true};
-}
-
-// Normal equations of the linearised point-to-plane error about `center`, with the rotation
-// scaled by `scale` (x = [scale * omega, t]).
-struct System {
-  Mat6 H = Mat6::Zero();
-  Vec6 g = Vec6::Zero();
-  double sum_sq = 0.0;
-  std::size_t count = 0;
-};
-
-// The residual threshold: inlier_sigma_factor robust sigmas (1.4826 * median |r|), clamped.
-double inlier_threshold(const std::vector<Pair>& pairs, const std::vector<double>& residuals,
-                        const LocalFitSettings& st, std::vector<double>& scratch) {
-  scratch.clear();
-  for (std::size_t i = 0; i < pairs.size(); ++i)
-    if (pairs[i].valid) scratch.push_back(std::abs(residuals[i]));
-  if (scratch.empty()) return 0.0;
-  const auto mid = scratch.begin() + static_cast<std::ptrdiff_t>(scratch.size() / 2);
-  std::nth_element(scratch.begin(), mid, scratch.end());
-  const double robust_sigma = 1.4826 * *mid;
-  return std::clamp(st.inlier_sigma_factor * robust_sigma, st.min_inlier_threshold_mm,
-                    st.max_correspondence_distance_mm);
-}
-
-// Everything one fit iterates over; the buffers are allocated once per fit.
-struct FitState {
-  std::vector<Vec3> source;
-  std::vector<Pair> pairs;
-  std::vector<double> residuals;
-  std::vector<double> scratch;
-  Vec3 center0 = Vec3::Zero();
-  double scale = 1.0;
-};
-
-System accumulate(const FitState& f, const Transform& T, double threshold, int threads) {
-  const Vec3 center = T * f.center0;
-  std::vector<System> partial(block_count(f.source.size(), kBlock));
-  for_each_block(f.source.size(), kBlock, threads,
-                 [&](std::size_t b, std::size_t lo, std::size_t hi) {
-                   System& s = partial[b];
-                   for (std::size_t i = lo; i < hi; ++i) {
-                     const Pair& p = f.pairs[i];
-                     const double r = f.residuals[i];
-                     if (!p.valid || std::abs(r) > threshold) continue;
-                     Vec6 J;
-                     J << (T * f.source[i] - center).cross(p.normal) / f.scale, p.normal;
-                     s.H.noalias() += J * J.transpose();
-                     s.g += J * r;
-                     s.sum_sq += r * r;
-                     ++s.count;
-                   }
-                 });
-  System total;
-  for (const System& s : partial) {  // fixed block order: independent of the thread count
-    total.H += s.H;
-    total.g += s.g;
-    total.sum_sq += s.sum_sq;
-    total.count += s.count;
-  }
-  return total;
-}
-
-// Solves H x = -g in the span of the significant eigenvectors; the rest stays at zero.
-Vec6 solve_determined(const System& sys, double ratio, int& determined) {
-  const Eigen::SelfAdjointEigenSolver<Mat6> eig(sys.H);
-  const double largest = eig.eigenvalues().maxCoeff();
-  Vec6 x = Vec6::Zero();
-  determined = 0;
-  for (int k = 0; k < 6; ++k) {
-    const double lambda = eig.eigenvalues()(k);
-    if (!(lambda > ratio * largest) || !(lambda > 0.0)) continue;
-    const Vec6 u = eig.eigenvectors().col(k);
-    x -= (u.dot(sys.g) / lambda) * u;
-    ++determined;
-  }
-  return x;
-}
-
-// One Gauss-Newton step on the current pairs. Returns false when too few pairs are left;
-// `small` tells whether the step fell below the convergence settings.
-bool gauss_newton_step(FitState& f, Transform& T, const LocalFitSettings& st,
-                       LocalFitResult& result, bool record, bool& small) {
-  for_each_block(f.source.size(), kBlock, st.threads,
-                 [&](std::size_t, std::size_t lo, std::size_t hi) {
-                   for (std::size_t i = lo; i < hi; ++i)
-                     f.residuals[i] = f.pairs[i].normal.dot(T * f.source[i]) - f.pairs[i].offset;
-                 });
-  const double threshold = inlier_threshold(f.pairs, f.residuals, st, f.scratch);
-  const System sys = accumulate(f, T, threshold, st.threads);
-  if (sys.count < 3) return false;
-  if (record) result.error_history.push_back(sys.sum_sq / static_cast<double>(sys.count));
-  result.inliers = sys.count;
-  const Vec6 x =
-      solve_determined(sys, st.degenerate_eigenvalue_ratio, result.determined_directions);
-  const Vec3 omega = x.head<3>() / f.scale;
-  const Vec3 t = x.tail<3>();
-  // p' = c + R (p - c) + t: the update turns about the current centroid.
-  const Vec3 center = T * f.center0;
-  Transform step = Transform::Identity();
-  if (omega.norm() > 0.0)
-    step.linear() = Eigen::AngleAxisd(omega.norm(), omega.normalized()).toRotationMatrix();
-  step.translation() = center + t - step.linear() * center;
-  T = step * T;
-  small = omega.norm() < st.convergence_rotation_deg * kDegToRad &&
-          t.norm() < st.convergence_translation_mm;
-  return true;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -148,62 +57,62 @@ bool gauss_newton_step(FitState& f, Transform& T, const LocalFitSettings& st,
 LocalFitTarget::LocalFitTarget(const PartModel& model)
     : model_(&model), tree_(model.samples.points) {}
 
+IcpSettings icp_settings(const LocalFitSettings& st) {
+  IcpSettings s;
+  s.method = IcpMethod::kPointToPlane;
+  s.max_iterations = st.max_iterations;
+  s.max_inner_iterations = st.max_inner_iterations;
+  s.max_correspondence_distance_mm = st.max_correspondence_distance_mm;
+  s.trimmed_fraction = 0.0;
+  s.inlier_sigma_factor = st.inlier_sigma_factor;
+  s.min_inlier_threshold_mm = st.min_inlier_threshold_mm;
+  s.kernel = RobustKernel::kNone;
+  s.degenerate_eigenvalue_ratio = st.degenerate_eigenvalue_ratio;
+  s.min_pairs = kMinLocalPairs;
+  s.min_error_mm = 0.0;
+  s.error_ratio_stop = 0.0;
+  s.convergence_rotation_deg = st.convergence_rotation_deg;
+  s.convergence_translation_mm = st.convergence_translation_mm;
+  s.threads = st.threads;
+  return s;
+}
+
+std::optional<Error> validate(const LocalFitSettings& st, std::string_view context) {
+  if (st.min_points < kMinLocalPairs || st.min_points > 1'000'000'000)
+    return fail(std::string(context) + "min_points = " + std::to_string(st.min_points) +
+                ": must be in [3, 1e9]");
+  return validate(icp_settings(st), context);
+}
+
 Expected<LocalFitResult> local_fit(const LocalFitTarget& target, const PointCloud& scan,
                                    const std::vector<std::uint32_t>& indices,
                                    const LocalFitSettings& st) {
+  if (auto error = check_inputs(target, scan, indices, st)) return *error;
+  std::vector<Vec3> source;
+  source.reserve(indices.size());
+  for (std::uint32_t i : indices) source.push_back(scan.points[i]);
   const PartModel& model = target.model();
-  if (indices.size() < static_cast<std::size_t>(std::max(st.min_points, 3)))
-    return fail("local_fit: subset has " + std::to_string(indices.size()) +
-                " points, fewer than min_points " + std::to_string(st.min_points));
-  if (model.samples.empty() || model.samples.normals.size() != model.samples.size())
-    return fail("local_fit: the model samples have no normals");
-  if (st.correspondence == LocalFitCorrespondence::kExactSurface && !model.distance)
-    return fail("local_fit: kExactSurface needs PartModel::distance");
-  FitState f;
-  f.source.reserve(indices.size());
-  for (std::uint32_t i : indices) {
-    if (i >= scan.size())
-      return fail("local_fit: index " + std::to_string(i) + " outside the scan of " +
-                  std::to_string(scan.size()) + " points");
-    if (!scan.points[i].allFinite())
-      return fail("local_fit: point " + std::to_string(i) + " is not finite");
-    f.source.push_back(scan.points[i]);
-  }
-  // Rotations act about the subset's centroid, scaled by its rms radius (mm vs radians).
-  for (const Vec3& p : f.source) f.center0 += p;
-  f.center0 /= static_cast<double>(f.source.size());
-  double spread = 0.0;
-  for (const Vec3& p : f.source) spread += (p - f.center0).squaredNorm();
-  f.scale = std::max(std::sqrt(spread / static_cast<double>(f.source.size())), 1e-9);
-  f.pairs.resize(f.source.size());
-  f.residuals.resize(f.source.size());
-  f.scratch.reserve(f.source.size());
-
-  LocalFitResult result;
-  result.points = f.source.size();
-  Transform& T = result.T_model_subset;
   // ICP: find the pairs, then solve the point-to-plane problem on them to convergence (a few
   // Gauss-Newton steps); stop when fresh pairs no longer move the subset.
-  for (int iteration = 0; iteration < st.max_iterations && !result.converged; ++iteration) {
-    for_each_block(f.source.size(), kBlock, st.threads,
-                   [&](std::size_t, std::size_t lo, std::size_t hi) {
-                     for (std::size_t i = lo; i < hi; ++i)
-                       f.pairs[i] = find_pair(target, T * f.source[i], st);
-                   });
-    result.iterations = iteration + 1;
-    for (int inner = 0; inner < std::max(st.max_inner_iterations, 1); ++inner) {
-      bool small = false;
-      if (!gauss_newton_step(f, T, st, result, inner == 0, small))
-        return fail("local_fit: fewer than 3 of " + std::to_string(f.source.size()) +
-                    " points within " + std::to_string(st.max_correspondence_distance_mm) +
-                    " mm of the model");
-      if (small) {
-        result.converged = inner == 0;
-        break;
-      }
-    }
-  }
-  result.rms_mm = std::sqrt(result.error_history.back());
+  const IcpPairSearch search = st.correspondence == LocalFitCorrespondence::kExactSurface
+                                   ? exact_surface_pairs(model, st.max_correspondence_distance_mm)
+                                   : nearest_point_pairs(target.tree(), model.samples.normals,
+                                                         st.max_correspondence_distance_mm);
+  auto fit = icp(source, search, Transform::Identity(), icp_settings(st));
+  if (!fit) return fail("local_fit: " + fit.message());
+  if (fit->stop == IcpStop::kTooFewPairs)
+    return fail("local_fit: fewer than " + std::to_string(kMinLocalPairs) + " of " +
+                std::to_string(source.size()) + " points within " +
+                std::to_string(st.max_correspondence_distance_mm) + " mm of the model");
+  LocalFitResult result;
+  result.T_model_subset = fit->T_target_source;
+  result.rms_mm = fit->rms_mm();
+  result.points = source.size();
+  result.inliers = fit->inliers;
+  result.iterations = fit->iterations;
+  result.converged = fit->converged;
+  result.error_history = std::move(fit->error_history);
+  result.determined_directions = fit->determined_directions;
   return result;
 }
 
@@ -220,7 +129,7 @@ std::vector<std::uint32_t> points_on_faces(const LocalFitTarget& target, const P
   const auto& samples = target.model().samples;
   std::vector<std::uint8_t> keep(scan.size(), 0);
   if (samples.face_ids.size() == samples.size()) {
-    for_each_block(scan.size(), kBlock, threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
+    parallel_blocks(scan.size(), threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
       for (std::size_t i = lo; i < hi; ++i) {
         const auto nn = target.tree().nearest(scan.points[i], max_distance_mm);
         keep[i] = nn && std::find(face_ids.begin(), face_ids.end(), samples.face_ids[nn->index]) !=

@@ -128,5 +128,56 @@ TEST(Icp, FlatPartIsFlaggedDegenerate) {
   EXPECT_NEAR(r->T_target_source.translation().z(), -0.5, 1e-9);  // the constrained direction
 }
 
+TEST(Icp, EveryRangeIsCheckedOnceNamingTheField) {
+  IcpSettings s;
+  EXPECT_FALSE(validate(s));
+  s.max_inner_iterations = 0;
+  const auto error = validate(s, "settings: registration.");
+  ASSERT_TRUE(error);
+  EXPECT_NE(error->message.find("settings: registration.max_inner_iterations = 0"),
+            std::string::npos)
+      << error->message;
+  s = {};
+  s.convergence_rotation_deg = -1.0;
+  EXPECT_TRUE(validate(s));
+}
+
+TEST(Icp, ClientPairSearchWithInnerStepsAndRobustSigmaMatchesTheTreeSearch) {
+  // The local fits' use of the engine: several Gauss-Newton steps per pair search and a
+  // residual threshold instead of trimming. The same search written by a client gives the
+  // same result as the built-in nearest-point search.
+  const PointCloud model = testing::bumpy_surface(8000, 31);
+  std::vector<Vec3> scan;
+  for (std::size_t i = 0; i < model.size(); i += 3)
+    scan.push_back(small_motion() * model.points[i]);
+  const KdTree tree(model.points);
+  IcpSettings s;
+  s.max_inner_iterations = 5;
+  s.trimmed_fraction = 0.0;
+  s.inlier_sigma_factor = 3.0;
+  s.min_inlier_threshold_mm = 0.01;
+  s.kernel = RobustKernel::kNone;
+  s.error_ratio_stop = 0.0;
+  s.max_correspondence_distance_mm = 10.0;
+  const IcpPairSearch own = [&](const std::vector<Vec3>& source, const Transform& T,
+                                std::size_t begin, std::size_t end, std::vector<IcpPair>& pairs) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto hit = tree.nearest(T * source[i], 10.0);
+      pairs[i].valid = hit.has_value();
+      if (!hit) continue;
+      pairs[i] = {model.points[hit->index], model.normals[hit->index], hit->squared_distance, true};
+    }
+  };
+  auto a = icp(scan, own, Transform::Identity(), s);
+  auto b = icp(scan, tree, model.normals, Transform::Identity(), s);
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->T_target_source.matrix(), b->T_target_source.matrix());
+  EXPECT_TRUE(a->converged) << a->stop_reason;
+  EXPECT_EQ(a->stop, IcpStop::kIncrement);
+  EXPECT_GT(a->updates, a->iterations);  // more than one step on some pair sets
+  EXPECT_EQ(a->error_history.size(), static_cast<std::size_t>(a->iterations) + 1);
+  EXPECT_LT(testing::rotation_error_rad(a->T_target_source, small_motion().inverse()), 1e-6);
+}
+
 }  // namespace
 }  // namespace springscan::analysis
