@@ -20,7 +20,10 @@
 
 namespace springscan::daemon::regs {
 
-inline constexpr std::uint16_t kMapVersion = 1;
+// 2: ERROR_RESET keeps a valid result, RESULT_STALE (discrete input 10) instead of the TTL
+// dropping RESULT_VALID, PLC_COMM_LOST raises ERROR_CODE 7, PAGE_SELECT past the last page and
+// unit id 0 as below.
+inline constexpr std::uint16_t kMapVersion = 2;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
@@ -42,7 +45,8 @@ inline constexpr std::uint16_t kDiTriggerRejected = 6;  ///< last trigger edge r
 inline constexpr std::uint16_t kDiScannerOnline = 7;    ///< the scanner is present and open
 inline constexpr std::uint16_t kDiHeartbeat = 8;        ///< toggles every second
 inline constexpr std::uint16_t kDiPlcCommLost = 9;      ///< PLC_HEARTBEAT went silent (latched)
-inline constexpr std::uint16_t kDiCount = 10;
+inline constexpr std::uint16_t kDiResultStale = 10;  ///< RESULT_VALID unacknowledged > result_ttl_s
+inline constexpr std::uint16_t kDiCount = 11;
 
 // ------------------------------------------------------------------------------------------
 // Holding registers (FC03 read, FC06/FC16 write). 0..4 are written by the PLC; the mirrors
@@ -88,11 +92,11 @@ inline constexpr std::uint16_t kIrVectorRecordSize = 109;
 inline constexpr std::uint16_t kIrCycleTimeMs = 110;  ///< 110..111 int32 ms, trigger -> result
 inline constexpr std::uint16_t kIrBendCount = 112;    ///< bends in the table (<= 16)
 inline constexpr std::uint16_t kIrBendRecordSize = 113;
-inline constexpr std::uint16_t kIrBendsFailed = 114;   ///< bends out of angle tolerance
-inline constexpr std::uint16_t kIrP95Deviation = 115;  ///< 115..116 int32 um, 95th pct |dev|
-inline constexpr std::uint16_t kIrScanPoints = 117;    ///< 117..118 int32 points scanned
-inline constexpr std::uint16_t kIrResultReserved = 119;
-inline constexpr std::uint16_t kIrBendTable = 120;  ///< kMaxBends records of 6 registers
+inline constexpr std::uint16_t kIrBendsFailed = 114;     ///< bends out of angle tolerance
+inline constexpr std::uint16_t kIrP95Deviation = 115;    ///< 115..116 int32 um, 95th pct |dev|
+inline constexpr std::uint16_t kIrScanPoints = 117;      ///< 117..118 int32 points scanned
+inline constexpr std::uint16_t kIrResultReserved = 119;  ///< reserved, reads 0
+inline constexpr std::uint16_t kIrBendTable = 120;       ///< kMaxBends records of 6 registers
 inline constexpr std::uint16_t kBendRecordSize = 6;
 inline constexpr std::uint16_t kMaxBends = 16;
 // A bend record: +0 bend id, +1 flags (BendFlag), +2..3 springback in millidegrees (int32,
@@ -121,10 +125,15 @@ inline constexpr std::uint16_t kVectorDx = 2;
 inline constexpr std::uint16_t kVectorDy = 4;
 inline constexpr std::uint16_t kVectorDz = 6;
 inline constexpr std::uint16_t kMaxVectors = 1024;
+/// PAGE_SELECT 0..kPageCount-1 covers every record of the vector block; a larger value is
+/// refused with exception 03 (ILLEGAL DATA VALUE) and the register keeps its old page.
+inline constexpr std::uint16_t kPageCount =
+    (kMaxVectors + kWindowRecordsPerPage - 1) / kWindowRecordsPerPage;
 inline constexpr std::uint16_t kInputRegisterCount = kIrVectors + kMaxVectors * kVectorRecordSize;
 /// The chunk a PLC should read at most: a whole number of records, below FC04's limit of 125.
 inline constexpr std::uint16_t kRecommendedChunk = 120;
 
+static_assert(kPageCount * kWindowRecordsPerPage >= kMaxVectors, "pages cover the block");
 static_assert(kWindowEnd <= kIrVectors, "the window must not overlap the vector block");
 static_assert(kResultBlockEnd <= kIrWindowPage, "the result block must end below the window");
 static_assert(kInputRegisterCount <= 9999, "five-digit PLC references must reach every value");
@@ -183,7 +192,7 @@ enum class RejectCode : std::uint16_t {
   kResultNotAcked = 4,  ///< RESULT_VALID is still 1: RESULT_ACK first
   kScannerOffline = 5,  ///< SCANNER_ONLINE is 0
   kUnknownPart = 6,     ///< PART_ID is not in the part catalogue
-  kCommLost = 7,        ///< PLC_COMM_LOST is set: ERROR_RESET first
+  kCommLost = 7,        ///< PLC_COMM_LOST is set: PLC_HEARTBEAT, then ERROR_RESET
 };
 
 /// Bend record flags.

@@ -45,6 +45,25 @@ RequestVerdict refuse(int exception, std::string problem) {
   return RequestVerdict{exception, std::move(problem)};
 }
 
+// A write of PAGE_SELECT past the last page is refused with 03 (the value check comes after the
+// address check, as in the spec's state diagrams); nothing of the request is written.
+RequestVerdict check_page_select(const std::uint8_t* pdu, int function, std::uint32_t address,
+                                 std::uint32_t count) {
+  const std::uint8_t* value = nullptr;
+  if (function == MODBUS_FC_WRITE_SINGLE_REGISTER && address == regs::kHrPageSelect) {
+    value = pdu + 3;
+  } else if (function == MODBUS_FC_WRITE_MULTIPLE_REGISTERS && address <= regs::kHrPageSelect &&
+             regs::kHrPageSelect < address + count) {
+    value = pdu + 6 + 2 * (regs::kHrPageSelect - address);
+  }
+  if (value != nullptr && word(value) >= regs::kPageCount) {
+    return refuse(MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE,
+                  "PAGE_SELECT " + std::to_string(word(value)) + " (pages are 0.." +
+                      std::to_string(regs::kPageCount - 1) + ")");
+  }
+  return {};
+}
+
 // Quantity limits of the Modbus Application Protocol V1.1b3, sections 6.1-6.4, 6.11, 6.12.
 // One switch over the function codes, kept whole (about 65 lines) so it reads as the spec's table.
 RequestVerdict check_pdu(const std::uint8_t* pdu, std::size_t pdu_size) {
@@ -110,7 +129,7 @@ RequestVerdict check_pdu(const std::uint8_t* pdu, std::size_t pdu_size) {
                       std::to_string(address) + " count " + std::to_string(count) +
                       " is outside the register map or read-only");
   }
-  return {};
+  return check_page_select(pdu, function, address, count);
 }
 
 }  // namespace
@@ -159,7 +178,9 @@ RequestVerdict check_request(const std::uint8_t* adu, std::size_t size,
                     "function code " + std::to_string(function) + " is not served");
   }
   const std::uint8_t unit = adu[kMbapHeaderBytes - 1];
-  if (unit != settings.unit_id && unit != 0xFF) {
+  // 0xFF and 0 both address the device itself on Modbus TCP (the Messaging on TCP/IP
+  // Implementation Guide recommends 0xFF and accepts 0); pymodbus sends 0 by default.
+  if (unit != settings.unit_id && unit != 0xFF && unit != 0) {
     return refuse(MODBUS_EXCEPTION_GATEWAY_TARGET, "unit id " + std::to_string(unit) +
                                                        " (this station is unit " +
                                                        std::to_string(settings.unit_id) + ")");

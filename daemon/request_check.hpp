@@ -36,12 +36,13 @@ struct RequestVerdict {
 };
 
 struct RequestCheckSettings {
-  std::uint8_t unit_id = 1;  ///< also accepted: 0xFF, the "no unit" value of Modbus TCP
+  std::uint8_t unit_id = 1;  ///< also accepted: 0xFF and 0, the "this device" values of TCP
 };
 
 /// Checks a complete ADU (MBAP + PDU, as framed by check_mbap_prefix): function-code
 /// whitelist (1,2,3,4,5,6,15,16 -> else 01), PDU length and quantities (-> 03), address
-/// ranges and writes to read-only areas (-> 02), unit id (-> 0B, gateway target failed).
+/// ranges and writes to read-only areas (-> 02), PAGE_SELECT values past the last page (-> 03),
+/// unit id (-> 0B, gateway target failed).
 RequestVerdict check_request(const std::uint8_t* adu, std::size_t size,
                              const RequestCheckSettings& settings = {});
 

@@ -27,6 +27,7 @@ MachineStep InspectionMachine::update(const PlcControl& plc, bool scanner_online
   track_heartbeat(plc, now, step);
   handle_reset_ack_and_ttl(plc, now, step);
   handle_trigger(plc, now, step);
+  settle_state();
   previous_trigger_ = plc.trigger;
   previous_ack_ = plc.result_ack;
   previous_reset_ = plc.error_reset;
@@ -48,6 +49,8 @@ void InspectionMachine::track_heartbeat(const PlcControl& plc, Clock::time_point
   if (heartbeat_armed_ && !status_.plc_comm_lost &&
       older_than(heartbeat_changed_, now, settings_.plc_heartbeat_timeout_s)) {
     status_.plc_comm_lost = true;
+    // ERROR and ERROR_CODE say why READY dropped; an error already latched keeps its code.
+    if (!status_.error()) status_.error_code = regs::ErrorCode::kPlcCommLost;
     step.events.push_back(MachineEvent::kCommLost);
   }
 }
@@ -55,16 +58,21 @@ void InspectionMachine::track_heartbeat(const PlcControl& plc, Clock::time_point
 void InspectionMachine::handle_reset_ack_and_ttl(const PlcControl& plc, Clock::time_point now,
                                                  MachineStep& step) {
   if (plc.error_reset && !previous_reset_) {
+    // Clears the errors only: a valid result stays valid (and unacknowledged) across a reset,
+    // so a PLC may reset and acknowledge in either order (register map "Reconnecting").
     status_.error_code = regs::ErrorCode::kNone;
     status_.error_detail = regs::ErrorDetail::kNone;
     status_.trigger_rejected = false;
     status_.reject_code = regs::RejectCode::kNone;
-    if (status_.plc_comm_lost &&
-        !older_than(heartbeat_changed_, now, settings_.plc_heartbeat_timeout_s)) {
-      status_.plc_comm_lost = false;
-      step.events.push_back(MachineEvent::kCommRestored);
+    fault_ = false;
+    if (status_.plc_comm_lost) {
+      if (!older_than(heartbeat_changed_, now, settings_.plc_heartbeat_timeout_s)) {
+        status_.plc_comm_lost = false;
+        step.events.push_back(MachineEvent::kCommRestored);
+      } else {
+        status_.error_code = regs::ErrorCode::kPlcCommLost;  // still silent: stays latched
+      }
     }
-    clear_result();
     step.events.push_back(MachineEvent::kErrorReset);
   }
   if (plc.result_ack && !previous_ack_ && status_.result_valid) {
@@ -78,9 +86,12 @@ void InspectionMachine::handle_reset_ack_and_ttl(const PlcControl& plc, Clock::t
     step.events.push_back(MachineEvent::kResultClearedByJobChange);
   }
   previous_job_id_ = plc.job_id;
-  if (status_.result_valid && older_than(result_time_, now, settings_.result_ttl_s)) {
-    clear_result();
-    step.events.push_back(MachineEvent::kResultExpired);
+  if (status_.result_valid && !status_.result_stale &&
+      older_than(result_time_, now, settings_.result_ttl_s)) {
+    // "None lost": the result stays valid until acknowledged or superseded; the flag says the
+    // PLC has not collected it in time (its report is on disk either way).
+    status_.result_stale = true;
+    step.events.push_back(MachineEvent::kResultStale);
   }
 }
 
@@ -135,9 +146,16 @@ regs::RejectCode InspectionMachine::reject_reason(const PlcControl& plc) const {
 void InspectionMachine::clear_result() {
   status_.result_valid = false;
   status_.part_ok = false;
-  if (status_.state == regs::State::kDone || status_.state == regs::State::kFault) {
-    status_.state = regs::State::kIdle;
-  }
+  status_.result_stale = false;
+}
+
+void InspectionMachine::settle_state() {
+  // Between jobs: FAULT until ERROR_RESET after a failed job, else DONE while a result is shown,
+  // else IDLE. ERROR_CODE 6 or 7 alone does not make a FAULT (STATE stays DONE or IDLE).
+  if (status_.busy) return;
+  status_.state = fault_                 ? regs::State::kFault
+                  : status_.result_valid ? regs::State::kDone
+                                         : regs::State::kIdle;
 }
 
 void InspectionMachine::on_acquired() {
@@ -154,19 +172,20 @@ void InspectionMachine::on_job_finished(const JobEnd& end, Clock::time_point now
                              ? end.error_code
                              : regs::ErrorCode::kReportWriteFailed;
     status_.error_detail = end.error_detail;
-    status_.state = regs::State::kFault;
+    fault_ = true;
+    settle_state();
     return;
   }
   status_.result_valid = true;
+  status_.result_stale = false;
   status_.part_ok = end.part_ok && end.result_code == regs::ResultCode::kOk;
   result_time_ = now;
   if (end.error_code != regs::ErrorCode::kNone) {
     status_.error_code = end.error_code;
     status_.error_detail = end.error_detail;
-    status_.state = regs::State::kFault;
-  } else {
-    status_.state = regs::State::kDone;
+    fault_ = true;
   }
+  settle_state();
 }
 
 }  // namespace springscan::daemon

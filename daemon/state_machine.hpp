@@ -20,8 +20,8 @@ struct MachineSettings {
   bool auto_ack_on_trigger = false;        ///< an accepted trigger also acknowledges the result
   double plc_heartbeat_timeout_s = 3.0;    ///< PLC_HEARTBEAT silent this long -> COMM_LOST; 0 off
   double trigger_release_timeout_s = 5.0;  ///< TRIGGER held past this -> TRIG_ACK off + error
-  double result_ttl_s = 30.0;              ///< RESULT_VALID drops after this; 0 keeps it
-  std::set<std::uint16_t> known_parts;     ///< part ids in the catalogue; empty accepts any
+  double result_ttl_s = 30.0;  ///< unacknowledged this long -> RESULT_STALE (kept valid); 0 off
+  std::set<std::uint16_t> known_parts;  ///< part ids in the catalogue; empty accepts any
 };
 
 /// What the PLC wrote: coils OR-ed with CONTROL_WORD bits, and the holding registers.
@@ -46,6 +46,7 @@ struct MachineStatus {
   bool trigger_rejected = false;
   bool scanner_online = false;
   bool plc_comm_lost = false;
+  bool result_stale = false;  ///< RESULT_VALID older than result_ttl_s, still not acknowledged
   regs::ErrorCode error_code = regs::ErrorCode::kNone;
   regs::ErrorDetail error_detail = regs::ErrorDetail::kNone;
   regs::RejectCode reject_code = regs::RejectCode::kNone;
@@ -77,7 +78,7 @@ enum class MachineEvent {
   kTriggerHeldAtStart,
   kTriggerNotReleased,
   kResultAcked,
-  kResultExpired,
+  kResultStale,  ///< result_ttl_s passed without RESULT_ACK: RESULT_STALE, result kept
   kResultClearedByJobChange,
   kErrorReset,
   kCommLost,
@@ -111,6 +112,7 @@ class InspectionMachine {
   void handle_trigger(const PlcControl& plc, Clock::time_point now, MachineStep& step);
   regs::RejectCode reject_reason(const PlcControl& plc) const;
   void clear_result();
+  void settle_state();
 
   MachineSettings settings_;
   MachineStatus status_;
@@ -123,6 +125,7 @@ class InspectionMachine {
   bool first_update_ = true;
   std::uint16_t last_heartbeat_ = 0;
   std::uint16_t previous_job_id_ = 0;
+  bool fault_ = false;            ///< a job ended with an error: STATE FAULT until ERROR_RESET
   bool heartbeat_armed_ = false;  ///< the PLC has changed PLC_HEARTBEAT at least once
   Clock::time_point heartbeat_changed_;
   Clock::time_point result_time_;

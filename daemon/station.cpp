@@ -216,22 +216,26 @@ void Station::log_event(MachineEvent event, const PlcControl& plc) {
     case MachineEvent::kResultAcked:
       log_.debug("result acknowledged by the PLC");
       break;
-    case MachineEvent::kResultExpired:
+    case MachineEvent::kResultStale:
       log_.warning("the PLC did not acknowledge the result within " +
                    std::to_string(settings_.machine.result_ttl_s) +
-                   " s: RESULT_VALID dropped (modbus.result_ttl_s)");
+                   " s (modbus.result_ttl_s): RESULT_STALE = 1; the result stays valid until "
+                   "RESULT_ACK or the next accepted trigger, its report is on disk");
       break;
     case MachineEvent::kResultClearedByJobChange:
       log_.info("JOB_ID changed to " + std::to_string(plc.job_id) +
                 " before the result was acknowledged: RESULT_VALID dropped");
       break;
     case MachineEvent::kErrorReset:
-      log_.info("ERROR_RESET from the PLC: errors cleared");
+      log_.info(s.result_valid ? "ERROR_RESET from the PLC: errors cleared; the result stays valid "
+                                 "until RESULT_ACK"
+                               : "ERROR_RESET from the PLC: errors cleared");
       break;
     case MachineEvent::kCommLost:
       log_.error("PLC heartbeat lost: PLC_HEARTBEAT (holding 3) unchanged for " +
                  std::to_string(settings_.machine.plc_heartbeat_timeout_s) +
-                 " s. READY is off. Check the PLC and the network, then set ERROR_RESET.");
+                 " s (ERROR_CODE 7 unless another error is latched). READY is off; a result "
+                 "stays valid. Check the PLC and the network, then set ERROR_RESET.");
       break;
     case MachineEvent::kCommRestored:
       log_.info("PLC heartbeat is back");
@@ -259,6 +263,7 @@ std::string Station::status_text() const {
   if (s.error()) text += ", ERROR " + std::to_string(static_cast<int>(s.error_code));
   if (!s.scanner_online) text += ", scanner offline";
   if (s.plc_comm_lost) text += ", PLC comm lost";
+  if (s.result_stale) text += ", result not collected";
   return text + "; " + last_result_text_;
 }
 

@@ -211,6 +211,25 @@ TEST(ModbusServer, AnswersExceptionsForBadAddressesFunctionsAndReadOnlyWrites) {
   EXPECT_EQ(modbus_read_input_registers(c, 0, 1, r), 1);
 }
 
+TEST(ModbusServer, UnitIdZeroIsAnsweredAndPageSelectPastTheLastPageIsRefused) {
+  ServerHarness server;
+  Context ctx = server.client();
+  modbus_t* c = ctx.get();
+  modbus_set_slave(c, 0);  // what pymodbus sends by default
+  std::uint16_t r[4] = {};
+  ASSERT_EQ(modbus_read_input_registers(c, regs::kIrMapVersion, 1, r), 1);
+  EXPECT_EQ(r[0], regs::kMapVersion);
+  ASSERT_EQ(modbus_write_register(c, regs::kHrPageSelect, regs::kPageCount - 1), 1);
+  EXPECT_EQ(modbus_write_register(c, regs::kHrPageSelect, regs::kPageCount), -1);
+  EXPECT_EQ(errno, EMBXILVAL);
+  const std::uint16_t ids[4] = {7, 1, 3, 500};  // JOB_ID, PART_ID, PLC_HEARTBEAT, PAGE_SELECT
+  EXPECT_EQ(modbus_write_registers(c, regs::kHrJobId, 4, ids), -1);
+  EXPECT_EQ(errno, EMBXILVAL);
+  ASSERT_EQ(modbus_read_registers(c, 0, regs::kHrWritableCount, r), regs::kHrWritableCount);
+  EXPECT_EQ(r[regs::kHrJobId], 0);  // nothing of the refused write was applied
+  EXPECT_EQ(r[regs::kHrPageSelect], regs::kPageCount - 1);
+}
+
 TEST(ModbusServer, MalformedFramesGetExceptionsOrAClosedConnection) {
   ServerHarness server;
   {

@@ -98,6 +98,7 @@ TEST_P(RegisterImageTest, ResultBlockEncodesEveryField) {
   EXPECT_EQ(ir(regs::kIrVectorRecordSize), 8);
   EXPECT_EQ(ir(regs::kIrBendCount), 2);
   EXPECT_EQ(ir(regs::kIrBendsFailed), 1);
+  EXPECT_EQ(ir(regs::kIrResultReserved), 0);  // register 119: reserved, always 0
   const std::uint16_t bend2 = regs::kIrBendTable + regs::kBendRecordSize;
   EXPECT_EQ(ir(bend2 + regs::kBendId), 2);
   EXPECT_EQ(ir(bend2 + regs::kBendFlags), regs::kBendMeasured);
@@ -173,6 +174,41 @@ TEST_P(RegisterImageTest, ControlWordAndCoilsAreOred) {
   EXPECT_EQ(plc.part_id, 6);
 }
 
+TEST_P(RegisterImageTest, TriggerSetThroughControlWordDropsWhenItsBitIsCleared) {
+  RegisterImage image(GetParam());
+  modbus_mapping_t* m = image.mapping();
+  m->tab_registers[regs::kHrControlWord] = 0b011;  // TRIGGER_ENABLE + TRIGGER
+  EXPECT_TRUE(image.plc_control().trigger);
+  m->tab_registers[regs::kHrControlWord] = 0b001;  // drop TRIGGER, keep TRIGGER_ENABLE
+  EXPECT_FALSE(image.plc_control().trigger);
+  EXPECT_TRUE(image.plc_control().trigger_enable);
+  m->tab_bits[regs::kCoilTrigger] = 1;  // a coil left high keeps TRIGGER high whatever the word
+  EXPECT_TRUE(image.plc_control().trigger);
+}
+
+TEST_P(RegisterImageTest, LastPageShowsTheLastRecordsOfAFullBlock) {
+  RegisterImage image(GetParam());
+  ResultBlock block = example_block();
+  block.vectors.resize(regs::kMaxVectors, VectorRow{0.001, 0.0, 0.0});
+  image.publish_result(block);
+  image.mapping()->tab_registers[regs::kHrPageSelect] = regs::kPageCount - 1;  // 68
+  image.refresh_window();
+  EXPECT_EQ(image.input_register(regs::kIrWindowRecords + regs::kVectorIndex), 1020);
+  EXPECT_EQ(image.input_register(regs::kIrWindowRecords + 3 * 8 + regs::kVectorIndex), 1023);
+  EXPECT_EQ(image.input_register(regs::kIrWindowRecords + 4 * 8 + regs::kVectorFlags), 0);
+}
+
+TEST_P(RegisterImageTest, StaleResultIsDiscreteInputTenAndStatusWordBitTen) {
+  RegisterImage image(GetParam());
+  MachineStatus s;
+  s.result_valid = true;
+  s.result_stale = true;
+  image.publish_status(s, LiveValues{});
+  EXPECT_TRUE(image.discrete_input(regs::kDiResultStale));
+  EXPECT_TRUE(image.discrete_input(regs::kDiResultValid));
+  EXPECT_EQ(image.input_register(regs::kIrStatusWord), (1u << 10) | (1u << 3));
+}
+
 INSTANTIATE_TEST_SUITE_P(WordOrders, RegisterImageTest,
                          ::testing::Values(WordOrder::kAbcd, WordOrder::kCdab));
 
@@ -186,6 +222,19 @@ TEST(ResultBlockFromReport, FailedScanShowsInvalidDeviations) {
   EXPECT_EQ(block.part_id, 12);
   EXPECT_EQ(block.code, regs::ResultCode::kScanFailed);
   EXPECT_EQ(regs::mm_to_um(block.max_deviation_mm), regs::kInvalidInt32);
+}
+
+TEST(ResultBlockFromReport, MaxDevIsAMagnitudeEvenWhenTheLargestDeviationIsNegative) {
+  v1::InspectionReport report;
+  report.set_result_seq(7);
+  report.set_result_code(1);
+  report.mutable_deviation()->set_min(-0.9);
+  report.mutable_deviation()->set_max(0.3);
+  RegisterImage image(WordOrder::kAbcd);
+  image.publish_result(result_block_from_report(report));
+  const std::uint16_t w[2] = {image.input_register(regs::kIrMaxDeviation),
+                              image.input_register(regs::kIrMaxDeviation + 1)};
+  EXPECT_EQ(regs::decode_int32(w, WordOrder::kAbcd), 900);
 }
 
 TEST(ResultBlockFromReport, AnalysedReportKeepsLargestMagnitudeAndBends) {

@@ -70,7 +70,7 @@ TEST(RequestCheck, IllegalFunction) {
 
 TEST(RequestCheck, IllegalDataAddress) {
   EXPECT_EQ(verdict(adu(read_pdu(1, 3, 2))), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
-  EXPECT_EQ(verdict(adu(read_pdu(2, 10, 1))), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  EXPECT_EQ(verdict(adu(read_pdu(2, regs::kDiCount, 1))), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
   EXPECT_EQ(verdict(adu(read_pdu(4, regs::kLiveCount, 1))), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
   // A read spanning two blocks touches the gap between them.
   EXPECT_EQ(verdict(adu(read_pdu(4, regs::kWindowEnd - 1, 100))),
@@ -108,6 +108,30 @@ TEST(RequestCheck, OtherUnitIdIsAGatewayTargetException) {
   settings.unit_id = 9;
   const auto frame = adu(read_pdu(4, 0, 1), 9);
   EXPECT_EQ(check_request(frame.data(), frame.size(), settings).exception, 0);
+}
+
+TEST(RequestCheck, UnitIdZeroIsAnsweredLikeTheNoUnitValue) {
+  // pymodbus and other TCP clients send unit id 0 unless told otherwise.
+  EXPECT_EQ(verdict(adu(read_pdu(4, 0, 1), 0)), 0);
+  RequestCheckSettings settings;
+  settings.unit_id = 9;
+  const auto frame = adu(read_pdu(4, 0, 1), 0);
+  EXPECT_EQ(check_request(frame.data(), frame.size(), settings).exception, 0);
+}
+
+TEST(RequestCheck, PageSelectPastTheLastPageIsAnIllegalValue) {
+  const auto last = static_cast<std::uint8_t>(regs::kPageCount - 1);  // 68: records 1020..1023
+  EXPECT_EQ(regs::kPageCount, 69);
+  EXPECT_EQ(verdict(adu({6, 0, 4, 0, last})), 0);
+  EXPECT_EQ(verdict(adu({6, 0, 4, 0, 69})), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  EXPECT_EQ(verdict(adu({6, 0, 4, 0xFF, 0xFF})), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  // FC16 over 1..4 with PAGE_SELECT last: the whole write is refused, also when it starts at 4.
+  EXPECT_EQ(verdict(adu({16, 0, 1, 0, 4, 8, 0, 7, 0, 1, 0, 2, 0, last})), 0);
+  EXPECT_EQ(verdict(adu({16, 0, 1, 0, 4, 8, 0, 7, 0, 1, 0, 2, 0, 70})),
+            MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  EXPECT_EQ(verdict(adu({16, 0, 4, 0, 1, 2, 1, 0})), MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
+  // Other holding registers take any value; a write that does not reach 4 is not checked.
+  EXPECT_EQ(verdict(adu({16, 0, 1, 0, 3, 6, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF})), 0);
 }
 
 TEST(RequestCheck, FrameLengthMustMatchMbap) {

@@ -180,16 +180,61 @@ TEST_F(MachineTest, JobIdWrittenByARefusedTriggerWhileBusyKeepsTheComingResult) 
   EXPECT_TRUE(machine_.status().result_valid);
 }
 
-TEST_F(MachineTest, ResultValidExpiresAfterTtl) {
+TEST_F(MachineTest, ResultPastTtlStaysValidAndIsFlaggedStaleUntilAcknowledged) {
   update();
   trigger(1, 1);
   finish(regs::ResultCode::kOk, true);
   update(29s);
   EXPECT_TRUE(machine_.status().result_valid);
+  EXPECT_FALSE(machine_.status().result_stale);
   const MachineStep step = update(2s);
-  EXPECT_TRUE(has(step, MachineEvent::kResultExpired));
+  EXPECT_TRUE(has(step, MachineEvent::kResultStale));
+  EXPECT_TRUE(machine_.status().result_valid);  // none lost: kept until acknowledged
+  EXPECT_TRUE(machine_.status().part_ok);
+  EXPECT_TRUE(machine_.status().result_stale);
+  EXPECT_EQ(machine_.status().state, State::kDone);
+  EXPECT_FALSE(machine_.status().ready);
+  EXPECT_FALSE(has(update(1h), MachineEvent::kResultStale));  // said once
+  EXPECT_TRUE(machine_.status().result_valid);
+  pulse(&PlcControl::result_ack);
   EXPECT_FALSE(machine_.status().result_valid);
+  EXPECT_FALSE(machine_.status().result_stale);
   EXPECT_TRUE(machine_.status().ready);
+}
+
+TEST(MachineAutoAck, IsOffByDefaultAndAStaleResultIsSupersededByTheNextTrigger) {
+  EXPECT_FALSE(MachineSettings{}.auto_ack_on_trigger);
+  MachineSettings settings;
+  settings.auto_ack_on_trigger = true;
+  auto t = Clock::time_point{} + 1h;
+  InspectionMachine machine(settings, t);
+  PlcControl plc;
+  plc.trigger_enable = true;
+  machine.update(plc, true, t);
+  plc.trigger = true;
+  ASSERT_TRUE(machine.update(plc, true, t += 10ms).start);
+  plc.trigger = false;
+  machine.update(plc, true, t += 10ms);
+  machine.on_job_finished(JobEnd{regs::ResultCode::kOk, true, true, {}, {}}, t);
+  machine.update(plc, true, t += 31s);
+  EXPECT_TRUE(machine.status().result_stale);
+  plc.trigger = true;
+  ASSERT_TRUE(machine.update(plc, true, t += 10ms).start);
+  EXPECT_FALSE(machine.status().result_valid);
+  EXPECT_FALSE(machine.status().result_stale);
+}
+
+TEST_F(MachineTest, ErrorResetWithoutAnErrorKeepsTheResult) {
+  update();
+  trigger(1, 1);
+  finish(regs::ResultCode::kFormNok, false);
+  pulse(&PlcControl::error_reset);
+  EXPECT_TRUE(machine_.status().result_valid);
+  EXPECT_EQ(machine_.status().state, State::kDone);
+  EXPECT_FALSE(machine_.status().ready);  // still to be acknowledged
+  pulse(&PlcControl::result_ack);
+  EXPECT_TRUE(machine_.status().ready);
+  EXPECT_EQ(machine_.status().state, State::kIdle);
 }
 
 TEST_F(MachineTest, ScanFaultNeedsResetThenNextCyclePasses) {
@@ -206,9 +251,12 @@ TEST_F(MachineTest, ScanFaultNeedsResetThenNextCyclePasses) {
   EXPECT_EQ(machine_.status().reject_code, RejectCode::kErrorActive);
   plc_.trigger = false;
   update();
+  pulse(&PlcControl::result_ack);  // acknowledging the failed result leaves the FAULT
+  EXPECT_FALSE(machine_.status().result_valid);
+  EXPECT_EQ(machine_.status().state, State::kFault);
+  EXPECT_FALSE(machine_.status().ready);
   pulse(&PlcControl::error_reset);
   EXPECT_FALSE(machine_.status().error());
-  EXPECT_FALSE(machine_.status().result_valid);
   EXPECT_FALSE(machine_.status().trigger_rejected);
   EXPECT_EQ(machine_.status().state, State::kIdle);
   EXPECT_TRUE(machine_.status().ready);
@@ -239,17 +287,87 @@ TEST_F(MachineTest, SilentPlcHeartbeatRaisesCommLostUntilResetWithLiveHeartbeat)
   EXPECT_TRUE(has(step, MachineEvent::kCommLost));
   EXPECT_TRUE(machine_.status().plc_comm_lost);
   EXPECT_FALSE(machine_.status().ready);
+  EXPECT_TRUE(machine_.status().error());  // a PLC watching ERROR sees why READY dropped
+  EXPECT_EQ(machine_.status().error_code, regs::ErrorCode::kPlcCommLost);
+  EXPECT_EQ(machine_.status().state, State::kIdle);  // not a FAULT
   plc_.trigger = true;
   EXPECT_FALSE(update().start.has_value());
   EXPECT_EQ(machine_.status().reject_code, RejectCode::kCommLost);
   plc_.trigger = false;
   pulse(&PlcControl::error_reset);  // heartbeat still silent: stays latched
   EXPECT_TRUE(machine_.status().plc_comm_lost);
+  EXPECT_EQ(machine_.status().error_code, regs::ErrorCode::kPlcCommLost);
   plc_.plc_heartbeat = 2;
   update();
   pulse(&PlcControl::error_reset);
   EXPECT_FALSE(machine_.status().plc_comm_lost);
+  EXPECT_FALSE(machine_.status().error());
   EXPECT_TRUE(machine_.status().ready);
+}
+
+// The PLC goes away (cable, reboot) with a result unread; the new session finds PLC_COMM_LOST
+// latched and the result still valid, and may reset and acknowledge in either order.
+class CommLostWithAnUnreadResult : public MachineTest, public ::testing::WithParamInterface<bool> {
+ protected:
+  void lose_the_plc_with_a_result_pending() {
+    update();
+    plc_.plc_heartbeat = 1;
+    update();
+    trigger(5, 1);
+    update(4s);  // the PLC is gone: its heartbeat stops while the part is analysed
+    ASSERT_TRUE(machine_.status().plc_comm_lost);
+    finish(regs::ResultCode::kOk, true);
+    update(2min);  // a long outage: past result_ttl_s too
+    ASSERT_TRUE(machine_.status().result_valid);
+    ASSERT_TRUE(machine_.status().result_stale);
+    ASSERT_EQ(machine_.status().error_code, regs::ErrorCode::kPlcCommLost);
+    plc_.plc_heartbeat = 100;  // the new session's heartbeat starts
+    update();
+  }
+};
+
+TEST_P(CommLostWithAnUnreadResult, ResetAndAckInEitherOrderKeepTheResultUntilTheAck) {
+  const bool reset_first = GetParam();
+  lose_the_plc_with_a_result_pending();
+  if (reset_first) {
+    pulse(&PlcControl::error_reset);
+    EXPECT_FALSE(machine_.status().plc_comm_lost);
+    EXPECT_FALSE(machine_.status().error());
+    EXPECT_TRUE(machine_.status().result_valid);  // the reset did not drop it
+    EXPECT_TRUE(machine_.status().part_ok);
+    EXPECT_EQ(machine_.status().state, State::kDone);
+    pulse(&PlcControl::result_ack);
+  } else {
+    pulse(&PlcControl::result_ack);  // acknowledging works while PLC_COMM_LOST is set
+    EXPECT_FALSE(machine_.status().result_valid);
+    EXPECT_TRUE(machine_.status().plc_comm_lost);
+    EXPECT_FALSE(machine_.status().ready);
+    pulse(&PlcControl::error_reset);
+  }
+  EXPECT_FALSE(machine_.status().result_valid);
+  EXPECT_FALSE(machine_.status().error());
+  EXPECT_TRUE(machine_.status().ready);
+  trigger(6, 1);
+  EXPECT_EQ(machine_.status().trigger_count, 2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Order, CommLostWithAnUnreadResult, ::testing::Values(true, false),
+                         [](const ::testing::TestParamInfo<bool>& p) {
+                           return p.param ? "ResetFirst" : "AckFirst";
+                         });
+
+TEST_F(MachineTest, CommLostKeepsTheCodeOfAnErrorAlreadyLatched) {
+  update();
+  plc_.plc_heartbeat = 1;
+  update();
+  trigger(1, 1);
+  finish(regs::ResultCode::kScanFailed, false, regs::ErrorCode::kScanFailed);
+  update(4s);
+  EXPECT_TRUE(machine_.status().plc_comm_lost);
+  EXPECT_EQ(machine_.status().error_code, regs::ErrorCode::kScanFailed);
+  pulse(&PlcControl::error_reset);  // heartbeat still silent: code 7 takes over
+  EXPECT_EQ(machine_.status().error_code, regs::ErrorCode::kPlcCommLost);
+  EXPECT_EQ(machine_.status().state, State::kDone);  // the failed result, not yet acknowledged
 }
 
 TEST_F(MachineTest, TriggerNotReleasedForcesAckOffAndRaisesError) {
@@ -263,6 +381,16 @@ TEST_F(MachineTest, TriggerNotReleasedForcesAckOffAndRaisesError) {
   EXPECT_FALSE(machine_.status().trigger_ack);
   EXPECT_EQ(machine_.status().error_code, regs::ErrorCode::kTriggerNotReleased);
   EXPECT_TRUE(machine_.status().busy);  // the running job continues
+  finish(regs::ResultCode::kOk, true);
+  // Code 6 is a handshake error, not a failed job: STATE DONE, ERROR = 1, the result valid.
+  EXPECT_EQ(machine_.status().state, State::kDone);
+  EXPECT_TRUE(machine_.status().error());
+  EXPECT_TRUE(machine_.status().result_valid);
+  EXPECT_TRUE(machine_.status().part_ok);
+  plc_.trigger = false;
+  pulse(&PlcControl::error_reset);
+  EXPECT_EQ(machine_.status().state, State::kDone);
+  EXPECT_TRUE(machine_.status().result_valid);
 }
 
 TEST_F(MachineTest, RefusalReasons) {

@@ -202,6 +202,15 @@ TEST_F(StationTest, RestartShowsTheLastResultAsNotValidUnderANewBootId) {
   EXPECT_NE(status->live[regs::kIrBootId], first_boot);
   EXPECT_NE(status->live[regs::kIrBootId], 0);
   EXPECT_FALSE(status->bit(regs::kDiResultValid));
+  // Coils and holding registers start at 0 after a restart: the PLC writes TRIGGER_ENABLE,
+  // JOB_ID, PART_ID and PAGE_SELECT again (the old ones were 1, 5, 3).
+  std::uint8_t coils[regs::kCoilCount] = {1, 1, 1, 1};
+  ASSERT_EQ(modbus_read_bits(plc->context(), 0, regs::kCoilCount, coils), regs::kCoilCount);
+  for (const std::uint8_t coil : coils) EXPECT_EQ(coil, 0);
+  std::uint16_t holding[regs::kHrWritableCount] = {1, 1, 1, 1, 1};
+  ASSERT_EQ(modbus_read_registers(plc->context(), 0, regs::kHrWritableCount, holding),
+            regs::kHrWritableCount);
+  for (const std::uint16_t value : holding) EXPECT_EQ(value, 0);
   auto shown = plc->read_result();
   EXPECT_EQ(shown->seq, 1);
   EXPECT_EQ(shown->job_id, 5);
