@@ -9,6 +9,14 @@ endfunction()
 
 # The sanitizer build instruments every target, including generated protobuf code, so it is
 # applied to the whole build through these two variables rather than per target.
+# The fuzz build (clang): coverage instrumentation and ASan + UBSan everywhere, libFuzzer's
+# main only in the fuzz targets (tests/fuzz/CMakeLists.txt).
+if(SPRINGSCAN_FUZZ)
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
+                      -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
 if(SPRINGSCAN_SANITIZE)
   set(SPRINGSCAN_SANITIZER_FLAGS -fsanitize=address,undefined -fno-omit-frame-pointer
                                  -fno-sanitize-recover=undefined)
