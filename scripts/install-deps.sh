@@ -16,6 +16,8 @@ packages=(
 # Reference implementations and third-party peers used by tests and benchmarks.
 if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
   packages+=(mbpoll python3-scipy python3-numpy)
+  # The third-party PLC client test (tests/daemon/pymodbus_plc.py): Debian 12's pymodbus 3.0.
+  packages+=(python3-pymodbus)
   # The HTML report is checked in a real browser (tests/report/browser_test.cpp).
   packages+=(chromium)
 fi
