@@ -12,6 +12,9 @@ packages=(
   libusb-1.0-0-dev libmodbus-dev libsystemd-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
+  # scripts/package.sh and package-check.sh: dpkg-shlibdeps for CPack's DEB generator,
+  # systemd-analyze verify, adduser for the package's postinst.
+  dpkg-dev systemd adduser
 )
 # Reference implementations and third-party peers used by tests and benchmarks.
 if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
