@@ -11,6 +11,7 @@
 
 #include "analysis/core/expected.hpp"
 #include "daemon/log.hpp"
+#include "daemon/result_publisher.hpp"
 #include "daemon/station.hpp"
 #include "proto/springscan.pb.h"
 
@@ -30,6 +31,7 @@ struct DaemonSettings {
   std::vector<PartEntry> parts;
   std::string model_cache_dir = "/var/cache/springscan";
   LogLevel log_level = LogLevel::kInfo;
+  MqttSettings mqtt;  ///< mqtt.station is filled in (the station_name when not set)
 };
 
 /// Parses and validates `text`; `file_name` is used in error messages and to resolve relative

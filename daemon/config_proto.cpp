@@ -4,6 +4,7 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -255,6 +256,89 @@ std::string apply_top_level(const v1::DaemonConfig& c, const Locator& at, const 
   return "";
 }
 
+/// The mqtt { } section: on when present (unless enabled: false); files must be readable now,
+/// so that `springscand --check` catches a missing certificate before the service starts.
+std::string apply_mqtt(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
+                       DaemonSettings& out) {
+  MqttSettings& s = out.mqtt;
+  if (s.station.empty()) s.station = out.station.runner.station_name;
+  if (!c.has_mqtt()) return "";
+  const v1::MqttConfig& m = c.mqtt();
+  const auto path = [](const char* field) { return Locator::Path{{"mqtt", -1}, {field, -1}}; };
+  s.enabled = !m.has_enabled() || m.enabled();
+  std::string e;
+  if (m.has_host()) {
+    if (m.host().empty()) return at.where(path("host")) + ": is empty";
+    s.host = m.host();
+  }
+  if (m.has_port() && !(e = out_of_range(at, path("port"), m.port(), 1, 65535)).empty()) return e;
+  if (m.has_port()) s.port = m.port();
+  if (m.has_keepalive_s() &&
+      !(e = out_of_range(at, path("keepalive_s"), m.keepalive_s(), 5, 3600)).empty()) {
+    return e;
+  }
+  if (m.has_keepalive_s()) s.keepalive_s = m.keepalive_s();
+  if (m.has_retry_max_s() &&
+      !(e = out_of_range(at, path("retry_max_s"), m.retry_max_s(), 0.1, 3600.0)).empty()) {
+    return e;
+  }
+  if (m.has_retry_max_s()) {
+    s.retry_max_s = m.retry_max_s();
+    s.retry_initial_s = std::min(s.retry_initial_s, s.retry_max_s);
+  }
+  if (m.has_client_id()) s.client_id = m.client_id();
+  // Topic levels: no wildcards, and the station is one level.
+  const auto bad_topic = [](const std::string& text, bool one_level) {
+    return text.empty() || text.find_first_of(one_level ? "+#/" : "+#") != std::string::npos ||
+           text.front() == '/' || text.back() == '/';
+  };
+  if (m.has_topic_prefix()) {
+    if (bad_topic(m.topic_prefix(), false)) {
+      return at.where(path("topic_prefix")) + ": '" + m.topic_prefix() +
+             "' must be non-empty, without + or # and without a leading or trailing /";
+    }
+    s.topic_prefix = m.topic_prefix();
+  }
+  if (m.has_station()) s.station = m.station();
+  if (bad_topic(s.station, true)) {
+    return (m.has_station() ? at.where(path("station")) : at.where({{"station_name", -1}})) +
+           ": '" + s.station + "' cannot be a topic level (non-empty, no /, + or #)";
+  }
+  struct FileField {
+    const char* name;
+    bool present;
+    const std::string& value;
+    std::string* target;
+  };
+  const FileField files[] = {
+      {"ca_file", m.has_ca_file(), m.ca_file(), &s.ca_file},
+      {"cert_file", m.has_cert_file(), m.cert_file(), &s.cert_file},
+      {"key_file", m.has_key_file(), m.key_file(), &s.key_file},
+      {"password_file", m.has_password_file(), m.password_file(), &s.password_file}};
+  for (const FileField& f : files) {
+    if (!f.present) continue;
+    const std::string resolved = resolve(f.value, file);
+    std::ifstream readable(resolved);
+    if (resolved.empty() || !fs::is_regular_file(resolved) || !readable) {
+      return at.where(path(f.name)) + ": '" + f.value + "' is not a readable file" +
+             (resolved != f.value ? " (resolved to " + resolved + ")" : "");
+    }
+    *f.target = resolved;
+  }
+  if (s.cert_file.empty() != s.key_file.empty()) {
+    return at.where(path(s.cert_file.empty() ? "key_file" : "cert_file")) +
+           ": cert_file and key_file go together (a TLS client certificate and its key)";
+  }
+  if (!s.cert_file.empty() && s.ca_file.empty()) {
+    return at.where(path("cert_file")) + ": a client certificate needs TLS: set ca_file too";
+  }
+  if (m.has_username()) s.username = m.username();
+  if (!s.password_file.empty() && s.username.empty()) {
+    return at.where(path("password_file")) + ": a password needs a username";
+  }
+  return "";
+}
+
 }  // namespace
 
 Expected<DaemonSettings> parse_daemon_config(const std::string& text,
@@ -274,6 +358,7 @@ Expected<DaemonSettings> parse_daemon_config(const std::string& text,
   std::string error = apply_modbus(config.modbus(), at, settings);
   if (error.empty()) error = apply_parts(config, at, file_name, settings);
   if (error.empty()) error = apply_top_level(config, at, file_name, settings);
+  if (error.empty()) error = apply_mqtt(config, at, file_name, settings);
   if (!error.empty()) return fail(error);
   return settings;
 }

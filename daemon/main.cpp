@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "daemon/config.hpp"
+#include "daemon/result_publisher.hpp"
 #include "daemon/station.hpp"
 #include "daemon/wiring.hpp"
 
@@ -83,9 +84,16 @@ int main(int argc, char** argv) {
   }
   log.set_level(settings->log_level);
   if (check_only) {
-    log.info(config_path + ": config OK");
+    const MqttSettings& mqtt = settings->mqtt;
+    log.info(config_path + ": config OK" +
+             (mqtt.enabled
+                  ? "; results published to MQTT broker " + mqtt.host + ":" +
+                        std::to_string(mqtt.port) + (mqtt.ca_file.empty() ? "" : " (TLS)") +
+                        " as station " + mqtt.station
+                  : "; MQTT publishing off"));
     return 0;
   }
+  const MosquittoLibrary mosquitto_library;
   install_signal_handlers();
   auto scanner = make_scanner(settings->scanner, log);
   auto station = Station::create(
@@ -95,6 +103,17 @@ int main(int argc, char** argv) {
     log.error("cannot start: " + station.message());
     sd_notify(0, ("STATUS=cannot start: " + station.message()).c_str());
     return 1;
+  }
+  // Results to the plant: the publisher reads the report store on its own thread.
+  std::unique_ptr<ResultPublisher> publisher;
+  if (settings->mqtt.enabled) {
+    auto started =
+        ResultPublisher::start(settings->mqtt, (*station)->store(), (*station)->boot_id(), log);
+    if (!started) {
+      log.error("cannot start: " + started.message());
+      return 1;
+    }
+    publisher = std::move(*started);
   }
   (*station)->run(g_stop);
   std::thread([&log] {
@@ -106,7 +125,8 @@ int main(int argc, char** argv) {
               " s; exiting with status 1 without its result (nothing was reported to the PLC)");
     _exit(1);
   }).detach();
-  station->reset();  // cancels a running scan, waits for the runner
+  publisher.reset();  // "offline" to the broker, the last acknowledged record saved
+  station->reset();   // cancels a running scan, waits for the runner
   log.info("springscand stopped");
   return 0;
 }

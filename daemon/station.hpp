@@ -45,6 +45,8 @@ class Station {
   /// The Modbus port actually bound.
   int port() const { return server_->port(); }
   std::uint16_t boot_id() const { return live_.boot_id; }
+  /// The report store, for readers on other threads (the result publisher).
+  const ReportStore& store() const { return store_; }
   /// Sends READY=1 and runs step() until `stop` becomes true.
   void run(const std::atomic<bool>& stop);
   /// One loop iteration: waits at most `max_wait_ms` for sockets or the runner, serves them.

@@ -9,7 +9,7 @@ packages=(
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libtbb-dev
   libprotobuf-dev protobuf-compiler zlib1g-dev
-  libusb-1.0-0-dev libmodbus-dev libsystemd-dev
+  libusb-1.0-0-dev libmodbus-dev libsystemd-dev libmosquitto-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
   # scripts/package.sh and package-check.sh: dpkg-shlibdeps for CPack's DEB generator,
@@ -23,6 +23,8 @@ if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
   packages+=(python3-pymodbus)
   # The HTML report is checked in a real browser (tests/report/browser_test.cpp).
   packages+=(chromium)
+  # Results to the plant over MQTT: a real broker, a third-party subscriber, test certificates.
+  packages+=(mosquitto python3-paho-mqtt openssl)
 fi
 
 missing=()

@@ -145,6 +145,57 @@ TEST_F(ConfigTest, OtherRangeErrors) {
             std::string::npos);
 }
 
+TEST_F(ConfigTest, MqttIsOffByDefaultAndOnWithItsSection) {
+  auto off = parse(std::string(kMinimal) + "station_name: \"press-2\"\n");
+  ASSERT_TRUE(off.ok()) << off.message();
+  EXPECT_FALSE(off->mqtt.enabled);
+  EXPECT_EQ(off->mqtt.station, "press-2");  // the topic's station defaults to station_name
+  std::ofstream(dir_.str() + "/ca.crt") << "x";
+  std::ofstream(dir_.str() + "/password") << "secret\n";
+  auto on = parse(std::string(kMinimal) + R"(mqtt {
+  host: "broker.plant" port: 8883 client_id: "p2" topic_prefix: "plant/springscan/v1"
+  station: "p-2" ca_file: "ca.crt" username: "station" password_file: "password"
+  keepalive_s: 20 retry_max_s: 60
+})");
+  ASSERT_TRUE(on.ok()) << on.message();
+  const MqttSettings& m = on->mqtt;
+  EXPECT_TRUE(m.enabled);
+  EXPECT_EQ(m.host, "broker.plant");
+  EXPECT_EQ(m.port, 8883);
+  EXPECT_EQ(m.client_id, "p2");
+  EXPECT_EQ(m.station, "p-2");
+  EXPECT_EQ(m.ca_file, dir_.str() + "/ca.crt");  // resolved against the config
+  EXPECT_EQ(m.password_file, dir_.str() + "/password");
+  EXPECT_EQ(m.keepalive_s, 20);
+  EXPECT_DOUBLE_EQ(m.retry_max_s, 60.0);
+  EXPECT_EQ(mqtt_topics(m).json, "plant/springscan/v1/p-2/result/json");
+  auto disabled = parse(std::string(kMinimal) + "mqtt { enabled: false }");
+  ASSERT_TRUE(disabled.ok());
+  EXPECT_FALSE(disabled->mqtt.enabled);
+}
+
+TEST_F(ConfigTest, MqttErrorsNameTheField) {
+  const auto error = [this](const std::string& mqtt) {
+    return parse(std::string(kMinimal) + "mqtt {\n  " + mqtt + "\n}\n").message();
+  };
+  EXPECT_EQ(error("port: 0"), file() + ":3:3: mqtt.port: 0 is not in 1..65535");
+  EXPECT_EQ(error("port: 70000"), file() + ":3:3: mqtt.port: 70000 is not in 1..65535");
+  EXPECT_EQ(error("ca_file: \"none.crt\""),
+            file() + ":3:3: mqtt.ca_file: 'none.crt' is not a readable file (resolved to " +
+                dir_.str() + "/none.crt)");
+  EXPECT_NE(error("station: \"a/b\"").find("mqtt.station: 'a/b' cannot be a topic level"),
+            std::string::npos);
+  EXPECT_NE(error("topic_prefix: \"plant/#\"").find("mqtt.topic_prefix: 'plant/#'"),
+            std::string::npos);
+  std::ofstream(dir_.str() + "/c.crt") << "x";
+  EXPECT_NE(error("cert_file: \"c.crt\"").find("cert_file and key_file go together"),
+            std::string::npos);
+  std::ofstream(dir_.str() + "/password") << "x";
+  EXPECT_NE(error("password_file: \"password\"").find("a password needs a username"),
+            std::string::npos);
+  EXPECT_NE(error("host: \"\"").find("mqtt.host: is empty"), std::string::npos);
+}
+
 TEST_F(ConfigTest, MissingFileIsAnError) {
   auto s = load_daemon_config(dir_.str() + "/absent.textproto");
   ASSERT_FALSE(s.ok());

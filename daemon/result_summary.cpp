@@ -1,0 +1,161 @@
+#include "daemon/result_summary.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <string_view>
+
+namespace springscan::daemon {
+
+namespace {
+
+/// A minimal JSON writer: objects and arrays with comma handling, escaped strings, numbers in
+/// their shortest round-trip form (non-finite numbers become null, as JSON has no NaN).
+class JsonWriter {
+ public:
+  void begin_object(std::string_view key = {}) { open(key, '{'); }
+  void end_object() { close('}'); }
+  void begin_array(std::string_view key) { open(key, '['); }
+  void end_array() { close(']'); }
+
+  void field(std::string_view key, std::string_view value) {
+    prefix(key);
+    string(value);
+  }
+  void field(std::string_view key, const char* value) { field(key, std::string_view(value)); }
+  void field(std::string_view key, bool value) {
+    prefix(key);
+    out_ += value ? "true" : "false";
+  }
+  void field(std::string_view key, double value) {
+    prefix(key);
+    number(value);
+  }
+  void field(std::string_view key, std::int64_t value) {
+    prefix(key);
+    out_ += std::to_string(value);
+  }
+  void field(std::string_view key, std::uint64_t value) {
+    prefix(key);
+    out_ += std::to_string(value);
+  }
+  void element(std::string_view value) {
+    prefix({});
+    string(value);
+  }
+
+  std::string take() { return std::move(out_); }
+
+ private:
+  void open(std::string_view key, char bracket) {
+    prefix(key);
+    out_.push_back(bracket);
+    first_ = true;
+  }
+  void close(char bracket) {
+    out_.push_back(bracket);
+    first_ = false;
+  }
+  void prefix(std::string_view key) {
+    if (!first_) out_.push_back(',');
+    first_ = false;
+    if (!key.empty()) {
+      string(key);
+      out_.push_back(':');
+    }
+  }
+  void string(std::string_view text) {
+    out_.push_back('"');
+    for (const char c : text) {
+      switch (c) {
+        case '"':
+          out_ += "\\\"";
+          break;
+        case '\\':
+          out_ += "\\\\";
+          break;
+        case '\n':
+          out_ += "\\n";
+          break;
+        case '\r':
+          out_ += "\\r";
+          break;
+        case '\t':
+          out_ += "\\t";
+          break;
+        default:
+          if (static_cast<unsigned char>(c) < 0x20) {
+            char escaped[8];
+            std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(c));
+            out_ += escaped;
+          } else {
+            out_.push_back(c);
+          }
+      }
+    }
+    out_.push_back('"');
+  }
+  void number(double value) {
+    if (!std::isfinite(value)) {
+      out_ += "null";
+      return;
+    }
+    char buffer[32];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+    out_.append(buffer, result.ptr);
+  }
+
+  std::string out_;
+  bool first_ = true;
+};
+
+}  // namespace
+
+std::string result_summary_json(const v1::InspectionReport& report, const PublishedIds& ids) {
+  JsonWriter w;
+  w.begin_object();
+  w.field("schema", "springscan.result.v1");
+  w.field("station", ids.station);
+  w.field("boot_id", static_cast<std::uint64_t>(ids.boot_id));
+  w.field("record", ids.record);
+  w.field("result_seq", static_cast<std::uint64_t>(ids.result_seq));
+  w.field("created_utc", report.created_utc());
+  w.field("job_id", static_cast<std::int64_t>(report.job_id()));
+  w.field("part_id", report.input().part_id());
+  w.field("result_code", static_cast<std::uint64_t>(report.result_code()));
+  w.field("pass", report.verdict().pass());
+  w.begin_array("reasons");
+  for (const auto& reason : report.verdict().reasons()) w.element(reason);
+  w.end_array();
+  w.field("cycle_time_ms", report.cycle_time_ms());
+  if (report.has_deviation()) {
+    const v1::Deviation& d = report.deviation();
+    w.begin_object("deviation");
+    w.field("min_mm", d.min());
+    w.field("max_mm", d.max());
+    w.field("mean_mm", d.mean());
+    w.field("rms_mm", d.rms());
+    w.field("p95_mm", d.p95());
+    w.field("fraction_out_of_tolerance", d.fraction_out_of_tolerance());
+    w.field("tolerance_mm", d.tolerance_mm());
+    w.field("points", static_cast<std::int64_t>(d.points()));
+    w.end_object();
+  }
+  w.begin_array("bends");
+  for (const v1::Bend& b : report.bends()) {
+    w.begin_object();
+    w.field("id", static_cast<std::int64_t>(b.id()));
+    w.field("measured", b.measured());
+    w.field("nominal_angle_deg", b.nominal_angle_deg());
+    w.field("measured_angle_deg", b.measured_angle_deg());
+    w.field("springback_deg", b.springback_deg());
+    w.field("angle_tolerance_deg", b.angle_tolerance_deg());
+    w.field("pass", b.pass());
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
+  return w.take();
+}
+
+}  // namespace springscan::daemon

@@ -1,0 +1,65 @@
+#include "daemon/result_summary.hpp"
+
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace springscan::daemon {
+namespace {
+
+google::protobuf::Struct parse(const std::string& json) {
+  google::protobuf::Struct s;
+  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(json, &s).ok()) << json;
+  return s;
+}
+
+TEST(ResultSummaryTest, HoldsTheIdsVerdictDeviationAndBendTable) {
+  v1::InspectionReport r;
+  r.set_job_id(42);
+  r.set_result_code(1);
+  r.set_created_utc("2026-12-01T18:00:00Z");
+  r.mutable_input()->set_part_id("7");
+  r.mutable_verdict()->set_pass(false);
+  r.mutable_verdict()->add_reasons("bend 0: springback 2.1 deg > 1 \"tol\"\n");
+  r.mutable_deviation()->set_max(0.25);
+  r.mutable_deviation()->set_p95(0.125);
+  v1::Bend* b = r.add_bends();
+  b->set_id(3);
+  b->set_springback_deg(-0.1);
+  b->set_measured(true);
+  const std::string json = result_summary_json(r, PublishedIds{"press-4", 513, 90001, 24466});
+  EXPECT_EQ(json.find('\n'), std::string::npos);  // one line
+  const auto s = parse(json);
+  const auto& f = s.fields();
+  EXPECT_EQ(f.at("schema").string_value(), "springscan.result.v1");
+  EXPECT_EQ(f.at("station").string_value(), "press-4");
+  EXPECT_EQ(f.at("boot_id").number_value(), 513);
+  EXPECT_EQ(f.at("record").number_value(), 90001);
+  EXPECT_EQ(f.at("result_seq").number_value(), 24466);
+  EXPECT_EQ(f.at("job_id").number_value(), 42);
+  EXPECT_EQ(f.at("part_id").string_value(), "7");
+  EXPECT_EQ(f.at("result_code").number_value(), 1);
+  EXPECT_FALSE(f.at("pass").bool_value());
+  EXPECT_EQ(f.at("reasons").list_value().values(0).string_value(),
+            "bend 0: springback 2.1 deg > 1 \"tol\"\n");
+  EXPECT_EQ(f.at("deviation").struct_value().fields().at("p95_mm").number_value(), 0.125);
+  const auto& bend = f.at("bends").list_value().values(0).struct_value().fields();
+  EXPECT_EQ(bend.at("id").number_value(), 3);
+  EXPECT_EQ(bend.at("springback_deg").number_value(), -0.1);  // shortest round trip, exact
+  EXPECT_TRUE(bend.at("measured").bool_value());
+}
+
+TEST(ResultSummaryTest, EmptyReportAndNonFiniteNumbersStayValidJson) {
+  v1::InspectionReport r;
+  r.set_cycle_time_ms(std::numeric_limits<double>::quiet_NaN());
+  const auto s = parse(result_summary_json(r, {}));
+  EXPECT_EQ(s.fields().at("cycle_time_ms").kind_case(), google::protobuf::Value::kNullValue);
+  EXPECT_EQ(s.fields().at("bends").list_value().values_size(), 0);
+  EXPECT_EQ(s.fields().count("deviation"), 0u);
+}
+
+}  // namespace
+}  // namespace springscan::daemon
