@@ -16,6 +16,7 @@ int scan_main(int argc, char** argv);
 int convert_main(int argc, char** argv);
 int analyze_main(int argc, char** argv);
 int model_main(int argc, char** argv);
+int trend_main(int argc, char** argv);
 
 namespace {
 
@@ -27,6 +28,7 @@ const Command kCommands[] = {
     {"report", "render the HTML report again from a saved report.pb", report_main},
     {"scan", "acquire one scan from the configured USB scanner", scan_main},
     {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", convert_main},
+    {"trend", "control charts, Cp/Cpk and run rules over many reports (HTML)", trend_main},
 };
 
 void print_usage() {

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include <thread>
 
 #include "report/report_html.hpp"
+#include "report/trend_html.hpp"
 #include "tests/report/png_decode.hpp"
 #include "tests/report/report_fixture.hpp"
 
@@ -158,6 +160,70 @@ TEST_F(Browser, DomHoldsTheBendRowsAndVerdict) {
   EXPECT_NE(dom.find("class=\"banner fail\""), std::string::npos);
   EXPECT_NE(dom.find("HAT-7 &lt;rev&amp;B&gt;"), std::string::npos);
   EXPECT_NE(dom.find("NOT MEASURED"), std::string::npos);
+}
+
+// The trend page (report/trend_html.hpp) in the same browser: a non-blank screenshot with the
+// red of the flagged points, and the table and charts in the DOM.
+class TrendBrowser : public Browser {
+ protected:
+  void SetUp() override {
+    chromium_ = find_chromium();
+    if (chromium_.empty())
+      GTEST_SKIP() << "chromium is not installed (Debian package chromium; "
+                      "scripts/install-deps.sh installs it)";
+    dir_ = fs::temp_directory_path() / ("springscan_trend_browser_" + std::to_string(getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::vector<v1::InspectionReport> reports;
+    for (int k = 0; k < 60; ++k) {
+      v1::InspectionReport r;
+      r.mutable_input()->set_part_id("HAT-7");
+      r.set_result_seq(static_cast<std::uint32_t>(k + 1));
+      v1::Bend* b = r.add_bends();
+      b->set_id(1);
+      b->set_measured(true);
+      b->set_angle_tolerance_deg(1.0);
+      b->set_springback_deg(0.3 + 0.05 * std::sin(k * 1.7) + (k == 40 ? 0.6 : 0.0));
+      reports.push_back(r);
+    }
+    TrendPageInfo info;
+    info.reports = reports.size();
+    page_ = dir_ / "trend.html";
+    std::ofstream(page_) << render_trend_html(collect_characteristics(reports), info);
+  }
+};
+
+TEST_F(TrendBrowser, ScreenshotShowsTheCharts) {
+  const fs::path shot = dir_ / "shot.png";
+  auto args = browser_args("profile-trend");
+  args.push_back("--screenshot=" + shot.string());
+  args.push_back("file://" + page_.string());
+  ASSERT_EQ(run_bounded(args, dir_ / "shot.log", std::chrono::seconds(90)), 0)
+      << "chromium --screenshot failed or timed out (-1)";
+  std::string why;
+  auto png = testing::decode_png(read_file(shot), &why);
+  ASSERT_TRUE(png) << why;
+  std::size_t ink = 0, red = 0;
+  const auto n = static_cast<std::size_t>(png->width) * static_cast<std::size_t>(png->height);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* p = png->pixels.data() + i * static_cast<std::size_t>(png->channels);
+    ink += (p[0] < 200 || p[1] < 200 || p[2] < 200) ? 1 : 0;
+    red += (p[0] > 180 && p[1] < 90 && p[2] < 90) ? 1 : 0;
+  }
+  EXPECT_GT(ink, n / 200);  // text, axes, lines: not a blank page
+  EXPECT_GT(red, 10u);      // the tolerance lines and the flagged point
+}
+
+TEST_F(TrendBrowser, DomHoldsTheTableAndCharts) {
+  auto args = browser_args("profile-trend-dom");
+  args.push_back("--dump-dom");
+  args.push_back("file://" + page_.string());
+  ASSERT_EQ(run_bounded(args, dir_ / "dom.html", std::chrono::seconds(90)), 0);
+  const std::string dom = read_file(dir_ / "dom.html");
+  EXPECT_NE(dom.find("id=\"characteristics\""), std::string::npos);
+  EXPECT_NE(dom.find("class=\"individuals\""), std::string::npos);
+  EXPECT_NE(dom.find("class=\"moving-range\""), std::string::npos);
+  EXPECT_NE(dom.find("class=\"flagged\""), std::string::npos);
 }
 
 }  // namespace
