@@ -11,6 +11,7 @@
 #include "analysis/inspection/verdict.hpp"
 #include "analysis/matching/compensation.hpp"
 #include "analysis/matching/deformation_field.hpp"
+#include "analysis/matching/field_refinement.hpp"
 #include "analysis/messages/fit_proto.hpp"
 #include "analysis/messages/matching_proto.hpp"
 #include "analysis/messages/settings_proto.hpp"
@@ -76,7 +77,7 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
                   std::to_string(m.verdict().angle_tolerance_deg()) + " (must be > 0)");
     s.springback.angle_tolerance_deg = m.verdict().angle_tolerance_deg();
   }
-  s.springback.threads = s.threads;
+  s.springback.threads = s.field.refinement.threads = s.threads;
   s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
   s.deviation.threads = s.reduction.curvature.threads = s.threads;
   return s;
@@ -139,34 +140,65 @@ PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviat
 // Stages 6-7: local best fits of the CAD flanges and the bend table (docs/springback.md). A
 // model without flanges has no bends to measure; a model the stage cannot use (no face ids)
 // gives a warning rather than failing the whole inspection.
-void add_bend_table(const PartModel& model, const PointCloud& scan_in_cad,
-                    const SpringbackSettings& settings, v1::InspectionReport& report) {
-  if (model.segmentation.flanges.empty()) return;
-  const auto result = measure_springback(model, scan_in_cad, settings);
+// Returns the stage's result for the deformation field (its flange motions), if it ran.
+std::optional<SpringbackResult> add_bend_table(const PartModel& model,
+                                               const PointCloud& scan_in_cad,
+                                               const SpringbackSettings& settings,
+                                               v1::InspectionReport& report) {
+  if (model.segmentation.flanges.empty()) return std::nullopt;
+  auto result = measure_springback(model, scan_in_cad, settings);
   if (!result) {
     report.add_warnings(result.message());
-    return;
+    return std::nullopt;
   }
   fill_springback_report(*result, report);
   for (const BendMeasurement& bend : result->bends)
     if (!bend.measured) report.add_warnings(bend.status);
+  return std::move(result).value();
+}
+
+// The sample normal and face id of each k-center model point (they are model samples).
+void control_point_attributes(const PartModel& model, const KdTree& model_tree,
+                              const std::vector<Vec3>& centers, std::vector<Vec3>& normals,
+                              std::vector<int>& faces) {
+  normals.resize(centers.size());
+  faces.assign(centers.size(), -1);
+  for (std::size_t i = 0; i < centers.size(); ++i) {
+    const std::size_t k = model_tree.nearest(centers[i])->index;
+    normals[i] = model.samples.normals[k];
+    if (k < model.samples.face_ids.size()) faces[i] = model.samples.face_ids[k];
+  }
 }
 
 // Stages 8-9: the deformation field between the k-center-reduced model and scan (paper §5,
-// exact matching with its certificate) and the compensation vectors at the k-center model
+// exact matching with its certificate), refined to sub-sample accuracy with the flanges'
+// motions and the scan's local surface, and the compensation vectors at the k-center model
 // points (docs/matching.md).
-std::optional<Error> add_deformation(const ReductionOutcome& reduced, const Transform& T_cad_scan,
-                                     const PipelineSettings& s, v1::InspectionReport& report) {
+std::optional<Error> add_deformation(const PartModel& model, const KdTree& model_tree,
+                                     const ReductionOutcome& reduced, const Transform& T_cad_scan,
+                                     const std::vector<Vec3>& scan_in_cad,
+                                     const SpringbackResult* springback, const PipelineSettings& s,
+                                     v1::InspectionReport& report) {
   std::vector<Vec3> scan_centers;
   scan_centers.reserve(reduced.scan_centers.size());
   for (const Vec3& p : reduced.scan_centers) scan_centers.push_back(T_cad_scan * p);
-  auto field = deformation_field(reduced.model_centers, scan_centers, s.field);
-  if (!field) return fail(field.message());
-  to_proto(*field, report.mutable_deformation_field());
-  if (s.field.method == CorrespondenceMethod::kMinCostMatching && !field->optimality_certified)
+  auto raw = deformation_field(reduced.model_centers, scan_centers, s.field);
+  if (!raw) return fail(raw.message());
+  std::vector<Vec3> normals;
+  std::vector<int> faces;
+  control_point_attributes(model, model_tree, reduced.model_centers, normals, faces);
+  const FieldRefinementInput input{reduced.model_centers, normals,    faces,
+                                   model.segmentation,    springback, scan_in_cad,
+                                   model.samples.points};
+  const auto field = refine_field(*raw, input, s.field.refinement);
+  to_proto(field, report.mutable_deformation_field());
+  if (!field.uncovered.empty())
+    report.add_warnings("deformation field: " + std::to_string(field.uncovered.size()) +
+                        " model control points are not covered by the scan (no vector)");
+  if (s.field.method == CorrespondenceMethod::kMinCostMatching && !field.optimality_certified)
     report.add_warnings("deformation field: the matching's optimality certificate failed: " +
-                        field->matching.certificate.failure);
-  auto comp = compensation(*field, reduced.model_centers, s.compensation);
+                        field.matching.certificate.failure);
+  auto comp = compensation(field, reduced.model_centers, s.compensation);
   if (!comp) return fail(comp.message());
   append_to_report(*comp, &report);
   if (comp->unsupported > 0)
@@ -231,12 +263,15 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 6-7. Local best fits per flange and springback per bend (paper §4, automated).
-  add_bend_table(model, out.deviation_cloud, config->springback, report);
+  const auto springback = add_bend_table(model, out.deviation_cloud, config->springback, report);
   timings.set_local_fits(ms_since(t));
 
   t = Clock::now();
   // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
-  if (auto error = add_deformation(*reduced, fit->T_cad_scan, *config, report)) return *error;
+  if (auto error =
+          add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud.points,
+                          springback ? &*springback : nullptr, *config, report))
+    return *error;
   timings.set_deformation(ms_since(t));
 
   // 9. Verdict: deviation and springback against the tolerances, analysis health.

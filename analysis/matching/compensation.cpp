@@ -11,6 +11,9 @@
 namespace springscan::analysis {
 namespace {
 
+// A control point this close to a field point is that point (the k-center model points).
+constexpr double kSamePointMm = 1e-9;
+
 // The median distance from each field point to its nearest other field point: the sampling
 // spacing of the reduced model (about the k-center radius w).
 double median_spacing(const std::vector<Vec3>& points) {
@@ -70,19 +73,29 @@ Expected<Compensation> compensation(const DeformationField& field,
   const KdTree tree(anchors);
   std::vector<Neighbor> near;
   out.vectors.reserve(control_points.size());
+  const KdTree uncovered(field.uncovered_points);
   for (const Vec3& x : control_points) {
     CompensationVector c;
     c.point = x;
-    // sigma = 0 (a single field vector): only a coinciding point is supported.
-    tree.radius(x, 3.0 * sigma, near);
-    double weight_sum = 0.0;
     Vec3 sum = Vec3::Zero();
-    for (const Neighbor& n : near) {
-      const double w = sigma > 0.0 ? std::exp(-n.squared_distance / (2.0 * sigma * sigma)) : 1.0;
-      weight_sum += w;
-      sum += w * field.vectors[n.index].displacement();
+    double weight_sum = 0.0;
+    const auto own = tree.nearest(x, kSamePointMm);
+    if (own && field.refined) {
+      // A control point of the refined field: its own vector, already smooth (a rigid motion
+      // per flange plus an averaged normal offset); a Gaussian average would bend it at edges.
+      sum = field.vectors[own->index].displacement();
+      weight_sum = 1.0;
+      c.support = 1;
+    } else if (!uncovered.nearest(x, kSamePointMm)) {
+      // sigma = 0 (a single field vector): only a coinciding point is supported.
+      tree.radius(x, 3.0 * sigma, near);
+      for (const Neighbor& n : near) {
+        const double w = sigma > 0.0 ? std::exp(-n.squared_distance / (2.0 * sigma * sigma)) : 1.0;
+        weight_sum += w;
+        sum += w * field.vectors[n.index].displacement();
+      }
+      c.support = static_cast<int>(near.size());
     }
-    c.support = static_cast<int>(near.size());
     c.supported = weight_sum > 0.0;
     if (c.supported) {
       c.deformation = sum / weight_sum;

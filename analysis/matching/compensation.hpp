@@ -8,7 +8,10 @@
 // control point, d(x) = sum_i w_i d_i / sum_i w_i, w_i = exp(-|x - p_i|^2 / (2 sigma^2)) over the
 // vectors with |x - p_i| <= 3 sigma. It reproduces a constant field exactly, averages the noise
 // of single pairs, and never extrapolates: a control point with no vector within 3 sigma gets
-// no compensation and is marked unsupported.
+// no compensation and is marked unsupported. On a refined field (field_refinement.hpp) a
+// control point that is a field point takes its own vector (the refined field is smooth
+// already), a field point the scan does not cover gets none, and only other points (e.g. the
+// vertices of the CAD tessellation) are interpolated.
 //
 // Thread safety: pure functions; the writers touch only the file they are given.
 

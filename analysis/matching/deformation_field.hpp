@@ -31,9 +31,22 @@ enum class CorrespondenceMethod {
 /// "nearest_neighbor" or "min_cost_matching" (the report's deformation_field.method).
 const char* to_string(CorrespondenceMethod method);
 
+/// How the raw matching is refined to sub-sample accuracy (field_refinement.hpp).
+struct FieldRefinementSettings {
+  bool enabled = true;              ///< false: the field is the raw pairing (paper §5 as printed)
+  double support_radius_mm = 1.5;   ///< scan points within this (along the surface) of the
+                                    ///< predicted position support a vector
+  double normal_window_mm = 0.5;    ///< and within this along the normal (other side of the
+                                    ///< sheet, outliers and other surfaces are farther)
+  int min_support_points = 8;       ///< fewer: the point is not covered by the scan
+  double outlier_mad_factor = 3.0;  ///< residuals beyond this many robust sigmas are dropped
+  int threads = 0;                  ///< 0: all cores (the result does not depend on it)
+};
+
 struct DeformationFieldSettings {
   CorrespondenceMethod method = CorrespondenceMethod::kMinCostMatching;  ///< pairing rule
-  PointMatchingSettings matching;  ///< solver settings for kMinCostMatching
+  PointMatchingSettings matching;      ///< solver settings for kMinCostMatching
+  FieldRefinementSettings refinement;  ///< sub-sample refinement of the pairing
 };
 
 /// One vector of the field: model point -> scan point, CAD frame, mm.
@@ -43,6 +56,9 @@ struct DeformationVector {
   Vec3 model = Vec3::Zero();
   Vec3 scan = Vec3::Zero();
   double squared_distance_mm2 = 0.0;
+  double uncertainty_mm = 0.0;  ///< refined: 1-sigma of `scan` along the surface normal, from
+                                ///< the local noise and the number of supporting scan points
+  int support_points = 0;       ///< refined: scan points the normal offset was averaged over
   Vec3 displacement() const { return scan - model; }
 };
 
@@ -56,6 +72,15 @@ struct DeformationField {
   double total_cost_mm2 = 0.0;             ///< sum of squared lengths of the vectors
   bool optimality_certified = false;       ///< matching: the global dual certificate held
   PointMatching matching;                  ///< solver statistics (matching only)
+  /// Refined fields: the raw pairs that seeded them (the paper's field, kept for the report's
+  /// deformation_field.matching[]); `vectors` then hold the refined vectors.
+  std::vector<DeformationVector> matched;
+  bool refined = false;
+  std::vector<std::uint32_t> uncovered;  ///< refined: model points the scan does not cover
+  std::vector<Vec3> uncovered_points;    ///< their positions (CAD frame)
+  double scan_coverage = 0.0;            ///< refined: share of model points with a vector
+  double residual_rms_mm = 0.0;          ///< refined: rms of the supporting scan points' normal
+                                         ///< distance to the refined field's surface
 };
 
 /// Nearest-neighbour pairing: every scan point picks its nearest model point; each model point

@@ -2,6 +2,7 @@
 #include "analysis/messages/matching_proto.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace springscan::analysis {
@@ -15,6 +16,18 @@ void set_vec(const Vec3& p, v1::Vec3* out) {
   out->set_x(p.x());
   out->set_y(p.y());
   out->set_z(p.z());
+}
+
+void set_correspondence(const DeformationVector& v, bool refined, v1::Correspondence* c) {
+  set_vec(v.model, c->mutable_model());
+  set_vec(v.scan, c->mutable_scan());
+  c->set_model_index(static_cast<std::int32_t>(v.model_index));
+  c->set_scan_index(v.scan_index == UINT32_MAX ? -1 : static_cast<std::int32_t>(v.scan_index));
+  c->set_squared_distance(v.squared_distance_mm2);
+  if (refined) {
+    c->set_uncertainty_mm(v.uncertainty_mm);
+    c->set_support_points(v.support_points);
+  }
 }
 
 }  // namespace
@@ -42,6 +55,17 @@ Expected<DeformationFieldSettings> from_proto(const v1::MatchingSettings& m) {
   if (m.has_dense_limit()) {
     if (m.dense_limit() < 0) return bad("matching.dense_limit", m.dense_limit(), "must be >= 0");
     s.matching.dense_limit = m.dense_limit();
+  }
+  if (m.has_refine()) s.refinement.enabled = m.refine();
+  if (m.has_support_radius_mm()) {
+    if (!(m.support_radius_mm() > 0.0 && m.support_radius_mm() <= 50.0))
+      return bad("matching.support_radius_mm", m.support_radius_mm(), "0 to 50");
+    s.refinement.support_radius_mm = m.support_radius_mm();
+  }
+  if (m.has_normal_window_mm()) {
+    if (!(m.normal_window_mm() > 0.0 && m.normal_window_mm() <= 50.0))
+      return bad("matching.normal_window_mm", m.normal_window_mm(), "0 to 50");
+    s.refinement.normal_window_mm = m.normal_window_mm();
   }
   return s;
 }
@@ -106,6 +130,9 @@ void to_proto(const DeformationFieldSettings& s, v1::MatchingSettings* m) {
                     : v1::MatchingSettings::MIN_COST_MATCHING);
   m->set_candidate_neighbors(s.matching.candidate_neighbors);
   m->set_dense_limit(s.matching.dense_limit);
+  m->set_refine(s.refinement.enabled);
+  m->set_support_radius_mm(s.refinement.support_radius_mm);
+  m->set_normal_window_mm(s.refinement.normal_window_mm);
 }
 
 void to_proto(const CompensationSettings& s, v1::CompensationSettings* m) {
@@ -127,13 +154,14 @@ void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
 void to_proto(const DeformationField& field, v1::DeformationField* m) {
   m->Clear();
   m->set_method(to_string(field.method));
-  for (const auto& v : field.vectors) {
-    auto* c = m->add_vectors();
-    set_vec(v.model, c->mutable_model());
-    set_vec(v.scan, c->mutable_scan());
-    c->set_model_index(static_cast<std::int32_t>(v.model_index));
-    c->set_scan_index(static_cast<std::int32_t>(v.scan_index));
-    c->set_squared_distance(v.squared_distance_mm2);
+  for (const auto& v : field.vectors) set_correspondence(v, field.refined, m->add_vectors());
+  for (const auto& v : field.matched) set_correspondence(v, false, m->add_matching());
+  if (field.refined) {
+    m->set_refinement("flange_motion_surface");
+    m->set_scan_coverage(field.scan_coverage);
+    m->set_residual_rms_mm(field.residual_rms_mm);
+    for (const std::uint32_t i : field.uncovered)
+      m->add_uncovered_model_indices(static_cast<std::int32_t>(i));
   }
   m->set_coverage(field.coverage);
   m->set_model_points(static_cast<std::int32_t>(field.model_points));

@@ -1,0 +1,48 @@
+#pragma once
+// The deformation field at sub-sample accuracy (docs/matching.md "Refined field").
+//
+// The raw matching (deformation_field.hpp) pairs k-center points of model and scan, which are
+// independent samplings with a covering radius w: a pair can be up to w apart along the surface
+// whatever the part did. The refinement answers, for every model control point, where that
+// material point lies in the scan:
+//  1. predict it with the rigid motion of the material there (part_motion.hpp: the flange's
+//     motion chained through the measured springback, blended across bend zones; without a
+//     segmentation, the matching's displacement smoothed over its neighbours);
+//  2. correct the prediction along the moved surface normal by the robust mean normal offset of
+//     the scan points around the predicted position (within support_radius_mm along the surface
+//     and normal_window_mm along the normal; on a bend, the offset is radial from the bend
+//     axis, so the cylinder's curvature does not bias it);
+//     along a direction no flange plane fixes (the bend lines of an extrusion), the scan's
+//     sheet edges against the CAD's give the position;
+//  3. points with fewer than min_support_points scan points around them are not covered and
+//     get no vector.
+// Each vector's uncertainty is the robust sigma of its support over sqrt(count).
+//
+// Thread safety: a pure function; the result does not depend on the thread count.
+
+#include <vector>
+
+#include "analysis/core/part_model.hpp"
+#include "analysis/matching/deformation_field.hpp"
+#include "analysis/springback/springback.hpp"
+
+namespace springscan::analysis {
+
+/// What the refinement reads besides the raw field. References must outlive the call.
+struct FieldRefinementInput {
+  const std::vector<Vec3>& model_points;   ///< the k-center control points, CAD frame
+  const std::vector<Vec3>& model_normals;  ///< their sample normals
+  const std::vector<int>& model_faces;     ///< their face ids (-1: unknown)
+  const PartSegmentation& segmentation;
+  const SpringbackResult* springback;      ///< the local fits and bend table; null: none
+  const std::vector<Vec3>& scan_points;    ///< the whole scan in the result frame
+  const std::vector<Vec3>& model_samples;  ///< all model samples (the sheet's edges)
+};
+
+/// The refined field: `vectors` replaced by one refined vector per covered control point
+/// (model_index kept; scan_index the raw partner, or UINT32_MAX), the raw pairs moved to
+/// `matched`. With settings.enabled false the raw field is returned unchanged.
+DeformationField refine_field(const DeformationField& raw, const FieldRefinementInput& input,
+                              const FieldRefinementSettings& settings = {});
+
+}  // namespace springscan::analysis

@@ -1,0 +1,187 @@
+// The deformation field and the compensation against the constructed truth (issue 17): L, U, Z
+// and hat profiles and two openamr parts, produced with springback 0.2-3 deg, posed at random,
+// laser-scanned in two tilted passes, analysed by run_inspection. The truth of each control
+// point is the produced position of its CAD point in the result frame (field_truth.hpp).
+//
+// The contrast table of docs/matching.md comes from these cases:
+//   ./build/tests/analysis/springscan_analysis_tests --gtest_filter='FieldAccuracy.*Contrast*'
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <random>
+
+#include "tests/analysis/matching/field_truth.hpp"
+#include "tests/analysis/synthetic.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+using testing::field_errors;
+using testing::FieldRun;
+using testing::FieldScenario;
+
+struct PartCase {
+  std::string name;
+  bool profile = false;
+  parts::ProfileSpec spec;
+  std::vector<double> springback_deg;
+};
+
+// Asymmetric lengths: a symmetric profile has two best fits, and the material point of a
+// control point would be ambiguous.
+std::vector<PartCase> part_cases() {
+  using parts::ProfileSpec;
+  std::vector<PartCase> out;
+  out.push_back({"L", true, ProfileSpec{{70.0, 45.0}, {90.0}, {3.0}, 60.0, 0.0}, {1.7}});
+  out.push_back({"U",
+                 true,
+                 ProfileSpec{{35.0, 80.0, 25.0}, {90.0, 90.0}, {4.0, 4.0}, 60.0, 0.0},
+                 {2.5, 0.6}});
+  out.push_back({"Z",
+                 true,
+                 ProfileSpec{{40.0, 60.0, 30.0}, {80.0, -80.0}, {3.0, 3.0}, 60.0, 0.0},
+                 {0.3, 1.4}});
+  out.push_back({"hat",
+                 true,
+                 ProfileSpec{{30.0, 40.0, 60.0, 35.0, 25.0},
+                             {90.0, -90.0, -90.0, 90.0},
+                             {4.0, 4.0, 4.0, 4.0},
+                             60.0,
+                             0.0},
+                 {1.2, 2.0, 0.2, 3.0}});
+  out.push_back({"openamr-MMP.03.00.00.003_Motor_bracket.step", false, {}, {1.5, 0.8, 2.2, 0.5}});
+  out.push_back({"openamr-MMP.00.00.00.001_Front_panel.step", false, {}, {0.4, 0.25, 0.6, 0.3}});
+  return out;
+}
+
+const parts::CadPart& cad_of(const PartCase& c) {
+  return testing::field_part(c.name, c.profile ? &c.spec : nullptr);
+}
+
+Transform random_pose(unsigned seed) {
+  std::mt19937 rng(seed);
+  return testing::random_motion(rng, 200.0);
+}
+
+// Control point -> compensation vector, matched by position (the report lists supported ones).
+double compensation_p95(const FieldRun& run, double alpha) {
+  const KdTree control(run.control);
+  std::vector<double> err;
+  for (const auto& c : run.report.compensation()) {
+    const auto i = control.nearest(testing::vec(c.point()), 1e-6);
+    if (!i) continue;
+    const Vec3 truth = -alpha * (run.truth[i->index] - run.control[i->index]);
+    err.push_back((testing::vec(c.vector()) - truth).norm());
+  }
+  return testing::p95(err);
+}
+
+class FieldAccuracy : public ::testing::TestWithParam<int> {};
+
+TEST_P(FieldAccuracy, SubSampleAgainstTheProducedTruth) {
+  const PartCase c = part_cases()[static_cast<std::size_t>(GetParam())];
+  const auto& cad = cad_of(c);
+  FieldScenario sc;
+  sc.springback_deg = c.springback_deg;
+  sc.pose = random_pose(100u + static_cast<unsigned>(GetParam()));
+  const FieldRun run = testing::run_field_case(cad, sc);
+  const auto& field = run.report.deformation_field();
+  ASSERT_GT(field.vectors_size(), 20) << c.name;
+  EXPECT_EQ(field.refinement(), "flange_motion_surface");
+  EXPECT_EQ(field.matching_size(), std::min(field.model_points(), field.scan_points()));
+  const auto e = field_errors(run, field.vectors());
+  EXPECT_LE(e.p95_normal, 0.05) << c.name;
+  EXPECT_LE(e.p95_full, 0.1) << c.name;
+  EXPECT_LE(compensation_p95(run, 1.0), 0.1) << c.name;
+  EXPECT_LT(field.residual_rms_mm(), 0.04) << c.name;
+  // Coverage of the scanned area: every control point with scan all round it has a vector.
+  std::vector<bool> has(run.control.size(), false);
+  for (const auto& v : field.vectors()) has[static_cast<std::size_t>(v.model_index())] = true;
+  for (std::size_t i = 0; i < run.control.size(); ++i) {
+    if (run.scanned_points[i] >= 30) {
+      EXPECT_TRUE(has[i]) << c.name << " control point " << i;
+    }
+  }
+  for (const auto& v : field.vectors()) EXPECT_GT(v.uncertainty_mm(), 0.0);
+  // The safety clip is not reached by a correct field.
+  for (const auto& w : run.report.warnings()) EXPECT_EQ(w.find("clipped"), std::string::npos) << w;
+}
+
+TEST_P(FieldAccuracy, NoisyScanWithOutliersAndMissingAreas) {
+  const PartCase c = part_cases()[static_cast<std::size_t>(GetParam())];
+  FieldScenario sc;
+  sc.springback_deg = c.springback_deg;
+  sc.pose = random_pose(200u + static_cast<unsigned>(GetParam()));
+  sc.noise_mm = 0.05;
+  sc.outliers = 0.02;
+  sc.missing = 0.10;
+  const FieldRun run = testing::run_field_case(cad_of(c), sc);
+  const auto& field = run.report.deformation_field();
+  ASSERT_GT(field.vectors_size(), 20) << c.name;
+  EXPECT_LE(field_errors(run, field.vectors()).p95_full, 0.15) << c.name;
+  // The missing areas are reported as not covered.
+  std::vector<bool> has(run.control.size(), false);
+  for (const auto& v : field.vectors()) has[static_cast<std::size_t>(v.model_index())] = true;
+  int missing = 0;
+  for (std::size_t i = 0; i < run.control.size(); ++i)
+    if (run.scanned_points[i] == 0) {
+      EXPECT_FALSE(has[i]) << c.name << " control point " << i;
+      ++missing;
+    }
+  EXPECT_EQ(static_cast<std::size_t>(field.uncovered_model_indices_size()),
+            run.control.size() - static_cast<std::size_t>(field.vectors_size()));
+  std::printf("%s: %d control points in missing areas\n", c.name.c_str(), missing);
+}
+
+TEST_P(FieldAccuracy, ZeroSpringbackGivesZeroVectors) {
+  const PartCase c = part_cases()[static_cast<std::size_t>(GetParam())];
+  FieldScenario sc;
+  sc.springback_deg = {0.0};
+  sc.pose = random_pose(300u + static_cast<unsigned>(GetParam()));
+  const FieldRun run = testing::run_field_case(cad_of(c), sc);
+  ASSERT_GT(run.report.deformation_field().vectors_size(), 20) << c.name;
+  // Every vector is the truth within 0.05 mm. The truth itself is the result frame's error
+  // only: the best fit leaves the translation along an extrusion's bend lines to the sheet's
+  // end edges, where it is off by up to a few tenths today (global fit, not this stage).
+  EXPECT_LE(field_errors(run, run.report.deformation_field().vectors()).max_full, 0.05) << c.name;
+}
+
+// Prints the contrast table of docs/matching.md: nearest neighbour, the raw matching and the
+// refined field against the truth (p95 along the normal / full vector, mm).
+TEST_P(FieldAccuracy, ContrastTable) {
+  const PartCase c = part_cases()[static_cast<std::size_t>(GetParam())];
+  FieldScenario sc;
+  sc.springback_deg = c.springback_deg;
+  sc.pose = random_pose(100u + static_cast<unsigned>(GetParam()));
+  v1::AnalysisSettings nn;
+  nn.mutable_matching()->set_method(v1::MatchingSettings::NEAREST_NEIGHBOR);
+  const FieldRun a = testing::run_field_case(cad_of(c), sc, nn);
+  const FieldRun b = testing::run_field_case(cad_of(c), sc);
+  const auto e_nn = field_errors(a, a.report.deformation_field().matching());
+  const auto e_raw = field_errors(b, b.report.deformation_field().matching());
+  const auto e_ref = field_errors(b, b.report.deformation_field().vectors());
+  double truth_median = 0.0;
+  {
+    std::vector<double> t;
+    for (std::size_t i = 0; i < b.truth.size(); ++i)
+      t.push_back((b.truth[i] - b.control[i]).norm());
+    std::nth_element(t.begin(), t.begin() + static_cast<long>(t.size() / 2), t.end());
+    truth_median = t[t.size() / 2];
+  }
+  std::printf("| %s | %.2f | %.3f / %.3f | %.3f / %.3f | %.4f / %.4f | %.0f %% |\n", c.name.c_str(),
+              truth_median, e_nn.p95_normal, e_nn.p95_full, e_raw.p95_normal, e_raw.p95_full,
+              e_ref.p95_normal, e_ref.p95_full,
+              100.0 * b.report.deformation_field().scan_coverage());
+  EXPECT_LT(e_ref.p95_full, e_raw.p95_full);
+}
+
+std::string case_name(const ::testing::TestParamInfo<int>& param) {
+  const std::string n = part_cases()[static_cast<std::size_t>(param.param)].name;
+  if (n.size() < 8) return n;
+  return n.find("Motor") != std::string::npos ? "MotorBracket" : "FrontPanel";
+}
+
+INSTANTIATE_TEST_SUITE_P(Parts, FieldAccuracy, ::testing::Range(0, 4), case_name);
+
+}  // namespace
+}  // namespace springscan::analysis

@@ -1,0 +1,176 @@
+#pragma once
+// Ground truth for the deformation field (issue 17): a CAD part produced with known springback
+// (simulators/parts), laser-scanned from a pose, analysed end to end; the truth of every model
+// control point is the produced position of its CAD point, carried into the result frame by
+// the report's own best fit (T_cad_scan * T_scan_part). Nothing here reads what the analysis
+// computed except the report fields under test and the result frame.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "analysis/core/kdtree.hpp"
+#include "analysis/inspection/pipeline.hpp"
+#include "simulators/parts/cad_profile.hpp"
+#include "simulators/parts/laser_scan.hpp"
+#include "simulators/parts/produced_part.hpp"
+#include "tests/analysis/cad_test_util.hpp"
+
+namespace springscan::analysis::testing {
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr std::int64_t kFieldScanPoints = 20'000;  // the sanitizers run ~10x slower
+#else
+constexpr std::int64_t kFieldScanPoints = 200'000;
+#endif
+
+/// A CAD part from a profile (written as BRep, loaded like any CAD file) or the shared folder.
+inline const parts::CadPart& field_part(const std::string& name, const parts::ProfileSpec* spec) {
+  static std::map<std::string, parts::CadPart> cache;
+  if (auto it = cache.find(name); it != cache.end()) return it->second;
+  std::string path = shared_cad(name);
+  if (spec) {
+    path =
+        (std::filesystem::temp_directory_path() / ("springscan_field_" + name + ".brep")).string();
+    const auto written = parts::write_profile_cad(*spec, path);
+    EXPECT_TRUE(written) << written.message();
+  }
+  auto part = parts::load_cad_part(path);
+  EXPECT_TRUE(part) << name << ": " << part.message();
+  return cache.emplace(name, part ? std::move(*part) : parts::CadPart{}).first->second;
+}
+
+struct FieldScenario {
+  std::vector<double> springback_deg;  ///< one per bend (the last value repeats)
+  Transform pose = Transform::Identity();
+  double noise_mm = 0.02;
+  double outliers = 0.0;
+  double missing = 0.0;
+  std::int64_t points = kFieldScanPoints;
+  double tilt_deg = 35.0;  ///< two passes tilted about y (sees vertical walls)
+  std::uint64_t seed = 1;
+};
+
+/// Errors of one set of vectors against the truth (p95 over the control points it covers).
+struct FieldErrors {
+  double p95_normal = 0.0, p95_full = 0.0, max_full = 0.0, max_length = 0.0;
+  std::size_t vectors = 0;
+};
+
+inline double p95(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(v.size()))) - 1];
+}
+
+struct FieldRun {
+  v1::InspectionReport report;
+  std::vector<Vec3> truth;          ///< per model control point (report index), result frame
+  std::vector<Vec3> truth_normal;   ///< the produced surface normal there, result frame
+  std::vector<int> scanned_points;  ///< truth scan points (not outliers) within 1.5 mm
+  std::vector<Vec3> control;        ///< control points (CAD), by model index
+};
+
+inline Transform from_row_major(const google::protobuf::RepeatedField<double>& m) {
+  Transform T = Transform::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) T.matrix()(r, c) = m.Get(4 * r + c);
+  return T;
+}
+
+/// Produces, scans and analyses `part`; fills the truth of every control point the report has.
+inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& sc,
+                               const v1::AnalysisSettings& settings = {}) {
+  FieldRun run;
+  std::vector<double> sb(cad.model.segmentation.bends.size(), sc.springback_deg.back());
+  for (std::size_t k = 0; k < sb.size() && k < sc.springback_deg.size(); ++k)
+    sb[k] = sc.springback_deg[k];
+  auto part = parts::make_produced_part(cad.model, cad.shape, sb);
+  EXPECT_TRUE(part) << part.message();
+  if (!part) return run;
+  parts::LaserScanSettings ls;
+  ls.point_count = sc.points / 2;
+  ls.noise_sigma_mm = sc.noise_mm;
+  ls.outlier_fraction = sc.outliers;
+  ls.missing_fraction = sc.missing;
+  ls.T_scan_part = sc.pose;
+  // Lines at a slant to the part's edges, as a part lies on the station: every line crosses
+  // an edge at its own offset.
+  ls.line_direction = Vec3(0.35, 1.0, 0.0).normalized();
+  ls.threads = 2;
+  parts::LaserScan scan;
+  const double tilt = sc.tilt_deg * std::numbers::pi / 180.0;
+  for (int side : {1, -1}) {
+    ls.view_direction = Vec3(side * std::sin(tilt), 0.0, -std::cos(tilt));
+    ls.seed = sc.seed * 2 + static_cast<std::uint64_t>(side + 1);
+    auto pass = parts::laser_scan(*part, ls);
+    EXPECT_TRUE(pass) << pass.message();
+    if (!pass) return run;
+    const auto append = [](auto& to, const auto& from) {
+      to.insert(to.end(), from.begin(), from.end());
+    };
+    append(scan.cloud.points, pass->cloud.points);
+    append(scan.cad_points, pass->cad_points);
+    append(scan.outlier, pass->outlier);
+  }
+  auto outcome = run_inspection(cad.model, scan.cloud, settings);
+  EXPECT_TRUE(outcome) << outcome.message();
+  if (!outcome) return run;
+  run.report = std::move(outcome->report);
+  const Transform T_result_part = from_row_major(run.report.global_fit().transform()) * sc.pose;
+
+  // Control points: the report's model points (k-center picks of the model samples).
+  const auto& field = run.report.deformation_field();
+  run.control.assign(static_cast<std::size_t>(field.model_points()), Vec3::Zero());
+  for (const auto& v : field.matching())
+    run.control[static_cast<std::size_t>(v.model_index())] =
+        Vec3(v.model().x(), v.model().y(), v.model().z());
+  for (const auto& v : field.vectors())
+    run.control[static_cast<std::size_t>(v.model_index())] =
+        Vec3(v.model().x(), v.model().y(), v.model().z());
+  const KdTree samples(cad.model.samples.points);
+  std::vector<Vec3> seen;
+  for (std::size_t j = 0; j < scan.cad_points.size(); ++j)
+    if (!scan.outlier[j]) seen.push_back(scan.cad_points[j]);
+  const KdTree seen_tree(seen);
+  std::vector<Neighbor> near;
+  for (const Vec3& m : run.control) {
+    const std::size_t k = samples.nearest(m)->index;
+    const int face = cad.model.samples.face_ids[k];
+    const Transform local = part->local_transform(m, face);
+    run.truth.push_back(T_result_part * (local * m));
+    run.truth_normal.push_back(T_result_part.linear() * local.linear() *
+                               cad.model.samples.normals[k]);
+    seen_tree.radius(m, 1.5, near);
+    run.scanned_points.push_back(static_cast<int>(near.size()));
+  }
+  return run;
+}
+
+inline Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+/// Errors of `vectors` (model_index, scan) against the truth.
+inline FieldErrors field_errors(const FieldRun& run,
+                                const google::protobuf::RepeatedPtrField<v1::Correspondence>& vs) {
+  FieldErrors e;
+  std::vector<double> normal, full;
+  for (const auto& v : vs) {
+    const std::size_t i = static_cast<std::size_t>(v.model_index());
+    const Vec3 err = vec(v.scan()) - run.truth[i];
+    normal.push_back(std::abs(err.dot(run.truth_normal[i])));
+    full.push_back(err.norm());
+    e.max_full = std::max(e.max_full, err.norm());
+    e.max_length = std::max(e.max_length, (vec(v.scan()) - vec(v.model())).norm());
+  }
+  e.p95_normal = p95(normal);
+  e.p95_full = p95(full);
+  e.vectors = full.size();
+  return e;
+}
+
+}  // namespace springscan::analysis::testing
