@@ -207,6 +207,10 @@ std::string apply_parts(const v1::DaemonConfig& c, const Locator& at, const std:
       return at.where({{"parts", i}, {"cad_file", -1}}) + ": '" + p.cad_file() +
              "' is not a readable file" + (cad != p.cad_file() ? " (resolved to " + cad + ")" : "");
     }
+    // The same validation the analysis runs, now rather than as a FAULT at the first trigger.
+    if (auto valid = analysis::check_analysis_settings(p.settings()); !valid) {
+      return at.where({{"parts", i}, {"settings", -1}}) + ": " + valid.message();
+    }
     out.station.machine.known_parts.insert(static_cast<std::uint16_t>(p.part_id()));
     out.parts.push_back(
         PartEntry{static_cast<std::uint16_t>(p.part_id()), p.name(), cad, p.settings()});

@@ -11,6 +11,8 @@
 #include <string>
 #include <thread>
 
+#include "analysis/cad/model.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
 #include "daemon/config.hpp"
 #include "daemon/result_publisher.hpp"
 #include "daemon/station.hpp"
@@ -54,6 +56,27 @@ int usage(const std::string& message) {
   return 2;
 }
 
+// --check: every part's CAD file loads and segments, as the first trigger of that part would
+// need (its settings were validated with the config).
+bool check_part_models(const std::vector<springscan::daemon::PartEntry>& parts,
+                       springscan::daemon::Log& log) {
+  namespace analysis = springscan::analysis;
+  for (const auto& part : parts) {
+    const std::string name = "part " + std::to_string(part.part_id) + " (" + part.name + ")";
+    auto model_settings = analysis::from_proto(part.settings.model());
+    auto model = model_settings ? analysis::load_part_model(part.cad_file, *model_settings)
+                                : analysis::Expected<analysis::PartModel>(model_settings.error());
+    if (!model) {
+      log.error(name + ": " + model.message());
+      return false;
+    }
+    log.info(name + ": " + part.cad_file + " loads: " + std::to_string(model->face_count) +
+             " faces, " + std::to_string(model->segmentation.flanges.size()) + " flanges, " +
+             std::to_string(model->segmentation.bends.size()) + " bends");
+  }
+  return true;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -84,6 +107,7 @@ int main(int argc, char** argv) {
   }
   log.set_level(settings->log_level);
   if (check_only) {
+    if (!check_part_models(settings->parts, log)) return 2;
     const MqttSettings& mqtt = settings->mqtt;
     log.info(config_path + ": config OK" +
              (mqtt.enabled

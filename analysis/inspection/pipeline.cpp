@@ -12,6 +12,7 @@
 #include "analysis/matching/compensation.hpp"
 #include "analysis/matching/deformation_field.hpp"
 #include "analysis/matching/field_refinement.hpp"
+#include "analysis/messages/cad_model_proto.hpp"
 #include "analysis/messages/fit_proto.hpp"
 #include "analysis/messages/matching_proto.hpp"
 #include "analysis/messages/settings_proto.hpp"
@@ -279,6 +280,14 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   timings.set_total(ms_since(start));
   return out;
+}
+
+Expected<bool> check_analysis_settings(const v1::AnalysisSettings& settings) {
+  auto stages = load_settings(settings);
+  if (!stages) return stages.error();
+  auto model = from_proto(settings.model());
+  if (!model) return model.error();
+  return true;
 }
 
 }  // namespace springscan::analysis

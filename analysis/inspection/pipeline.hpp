@@ -16,6 +16,11 @@ struct InspectionOutcome {
 
 /// Runs every stage on one scan. `settings` holds only overrides (proto `optional` fields);
 /// each stage starts from its C++ defaults. Errors: unusable input (empty, degenerate, NaN).
+/// Validates `settings` exactly as run_inspection and the part model loader do (every stage's
+/// ranges, the model settings), without running anything: for config checks at load time.
+/// Errors name the field and the bad value.
+Expected<bool> check_analysis_settings(const v1::AnalysisSettings& settings);
+
 Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
                                            const v1::AnalysisSettings& settings = {});
 

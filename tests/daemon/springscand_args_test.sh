@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # springscand's command line: --help and --version answer on stdout with exit 0; a bad
 # argument gets one error line, the usage (ending in a newline) and exit 2.
-#   springscand_args_test.sh SPRINGSCAND_BINARY
+# --check loads every part's CAD file and validates its settings: 0 when usable, 2 otherwise.
+#   springscand_args_test.sh SPRINGSCAND_BINARY SOURCE_ROOT
 set -uo pipefail
 bin=$1
+src=$2
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAILED: $*" >&2; exit 1; }
@@ -26,4 +28,28 @@ grep -q '^usage: ' "$tmp/err" || fail "no usage after the error"
 "$bin" >"$tmp/out" 2>"$tmp/err"; rc=$?
 [[ $rc == 2 ]] || fail "no --config exit $rc"
 grep -q -- '--config FILE is required' "$tmp/err" || fail "missing --config not explained"
-echo "springscand arguments: 4 checks passed"
+config() {  # config(cad_file, settings)
+  cat >"$tmp/c.textproto" <<CONFIG
+modbus { bind_address: "127.0.0.1" port: 0 }
+scanner { kind: LASER_LINE }
+parts { part_id: 1 name: "demo" cad_file: "$1" $2 }
+report_dir: "$tmp/reports"
+model_cache_dir: "$tmp/cache"
+CONFIG
+}
+config "$src/demo/hat-profile.step" ""
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
+[[ $rc == 0 ]] || fail "--check of a good config: exit $rc: $(cat "$tmp/out")"
+grep -q "part 1 (demo): .*hat-profile.step loads: .* 4 bends" "$tmp/out" || fail "--check did not load the CAD: $(cat "$tmp/out")"
+
+config "$src/demo/hat-profile.step" "settings { registration { max_iterations: -3 } }"
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
+[[ $rc == 2 ]] || fail "--check of bad part settings: exit $rc"
+grep -q "c.textproto:3:.*max_iterations" "$tmp/out" || fail "bad settings not named with file:line: $(cat "$tmp/out")"
+
+printf 'ISO-10303-21;\nHEADER;\nnot a step file\n' >"$tmp/broken.step"
+config "$tmp/broken.step" ""
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
+[[ $rc == 2 ]] || fail "--check of a broken CAD file: exit $rc"
+grep -q "part 1 (demo): .*broken.step" "$tmp/out" || fail "broken CAD not named: $(cat "$tmp/out")"
+echo "springscand arguments: 7 checks passed"
