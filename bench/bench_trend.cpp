@@ -114,7 +114,11 @@ void BM_TrendWholeCommand(benchmark::State& state) {
   }
   state.counters["html_MB"] = static_cast<double>(html_bytes) / 1e6;
 }
-BENCHMARK(BM_TrendWholeCommand)->Arg(10'000)->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TrendWholeCommand)
+    ->Arg(10'000)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 void BM_TrendStatisticsAndPage(benchmark::State& state) {
   const std::string& dir = store(static_cast<int>(state.range(0)));

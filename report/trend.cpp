@@ -1,5 +1,7 @@
 #include "report/trend.hpp"
 
+#include <google/protobuf/arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -168,14 +170,32 @@ analysis::Expected<TrendInput> read_reports(const std::vector<std::string>& path
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   threads = static_cast<unsigned>(std::min<std::size_t>(threads, files.size() / 64 + 1));
   const auto work = [&](unsigned first) {
+    // Parsed on an arena (one allocation block for the deformation field's many small
+    // messages, freed at once), then only what the trend uses is kept.
+    google::protobuf::Arena arena;
     for (std::size_t i = first; i < files.size(); i += threads) {
       auto bytes = analysis::read_file_bytes(files[i]);
       if (!bytes) {
         parsed[i].error = bytes.message();
-      } else if (!parsed[i].report.ParseFromString(*bytes) ||
-                 parsed[i].report.schema() != "springscan.report.v1") {
-        parsed[i].error = files[i] + ": not an InspectionReport (springscan.report.v1)";
+        continue;
       }
+      auto* full = google::protobuf::Arena::CreateMessage<v1::InspectionReport>(&arena);
+      if (!full->ParseFromString(*bytes) || full->schema() != "springscan.report.v1") {
+        parsed[i].error = files[i] + ": not an InspectionReport (springscan.report.v1)";
+      } else {
+        v1::InspectionReport& kept = parsed[i].report;
+        kept.set_schema(full->schema());
+        kept.set_created_utc(full->created_utc());
+        kept.set_station(full->station());
+        kept.set_job_id(full->job_id());
+        kept.set_result_seq(full->result_seq());
+        kept.set_result_code(full->result_code());
+        kept.mutable_input()->set_part_id(full->input().part_id());
+        *kept.mutable_bends() = full->bends();
+        if (full->has_deviation()) *kept.mutable_deviation() = full->deviation();
+        if (full->has_verdict()) *kept.mutable_verdict() = full->verdict();
+      }
+      arena.Reset();
     }
   };
   std::vector<std::thread> pool;

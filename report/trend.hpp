@@ -71,8 +71,10 @@ std::vector<Characteristic> collect_characteristics(
     const std::vector<v1::InspectionReport>& reports);
 
 struct TrendInput {
-  std::vector<v1::InspectionReport> reports;  ///< ordered by created_utc, then path
-  std::vector<std::string> skipped;           ///< "path: reason" for files that were not reports
+  /// Ordered by created_utc, then path. Only what the trend uses is kept: schema, created_utc,
+  /// station, job_id, result_seq, result_code, input.part_id, bends, deviation, verdict.
+  std::vector<v1::InspectionReport> reports;
+  std::vector<std::string> skipped;  ///< "path: reason" for files that were not reports
 };
 
 /// Reads every report.pb under `paths` (a report store, a folder of report.pb files, or single
