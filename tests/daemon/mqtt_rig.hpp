@@ -143,6 +143,7 @@ class MosquittoBroker {
       }
       ::usleep(20000);
     }
+    stop();  // a throwing constructor runs no destructor: never leave the broker behind
     throw std::runtime_error("mosquitto does not accept connections on port " +
                              std::to_string(port_) + ": " + log());
   }
