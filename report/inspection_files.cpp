@@ -81,6 +81,26 @@ Expected<bool> write_inspection_files(const std::string& dir, const InspectionOu
   if (!ply) return fail(ply_path + ": " + ply.message());
   if (auto written = write_file_atomically(ply_path, *ply); !written) return written.error();
 
+  // The compensation a tool designer loads: vectors as CSV and PLY, and the CAD tessellation
+  // moved by them (docs/matching.md "Compensation").
+  if (auto written = write_file_atomically(join(dir, "compensation.csv"),
+                                           format_compensation_csv(outcome.compensation));
+      !written)
+    return written.error();
+  if (auto written = write_file_atomically(join(dir, "compensation.ply"),
+                                           format_compensation_ply(outcome.compensation));
+      !written)
+    return written.error();
+  if (!outcome.compensated_surface.triangles.empty()) {
+    Surface surface;
+    surface.cloud.points = outcome.compensated_surface.vertices;
+    surface.triangles = outcome.compensated_surface.triangles;
+    auto stl = format_stl(surface);
+    if (!stl) return fail("compensated-surface.stl: " + stl.message());
+    if (auto written = write_file_atomically(join(dir, "compensated-surface.stl"), *stl); !written)
+      return written.error();
+  }
+
   // Last: a present report.pb means the other two files are complete (the daemon relies on it).
   std::string pb;
   if (!outcome.report.SerializeToString(&pb)) return fail("cannot serialize the report");

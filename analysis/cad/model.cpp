@@ -28,6 +28,7 @@ Expected<PartModel> build_model(const CadShape& shape, const CadModelSettings& s
   }
   model.face_count = shape.face_count();
   model.distance = make_cad_distance(shape, settings.distance);
+  model.mesh = tessellation(shape);
   return model;
 }
 
@@ -47,6 +48,7 @@ Expected<PartModel> read_cache(const std::string& cache_file, const std::string&
   if (!model) return model.error();
   if (model->face_count != shape->face_count()) return fail(cache_file + ": face count mismatch");
   model->distance = make_cad_distance(*shape, settings.distance);
+  model->mesh = tessellation(*shape);
   return model;
 }
 
@@ -60,6 +62,13 @@ std::string write_cache(const std::string& cache_file, const v1::CachedPartModel
 }
 
 }  // namespace
+
+TriangleMesh tessellation(const CadShape& shape) {
+  TriangleMesh mesh;
+  mesh.vertices = shape.mesh().vertices;
+  mesh.triangles = shape.mesh().triangles;
+  return mesh;
+}
 
 std::string cache_settings_key(const CadModelSettings& s) { return model_settings_key(s); }
 

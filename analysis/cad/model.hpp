@@ -43,6 +43,9 @@ Expected<CachedModelLoad> load_part_model_cached(const std::string& path,
                                                  const std::string& cache_dir,
                                                  const CadModelSettings& settings = {});
 
+/// The shape's tessellation as PartModel::mesh holds it (vertices and triangles, CAD frame).
+TriangleMesh tessellation(const CadShape& shape);
+
 /// The settings that shape a cached model, as one canonical string (part of the cache key).
 std::string cache_settings_key(const CadModelSettings& settings);
 

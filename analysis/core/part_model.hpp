@@ -64,6 +64,9 @@ struct PartModel {
   PartSegmentation segmentation;
   int face_count = 0;
   std::shared_ptr<const SurfaceDistance> distance;  ///< null: distances to the samples instead
+  /// The CAD tessellation (CAD frame, mm): the surface the compensated-surface.stl moves. Empty
+  /// for a model built from points.
+  TriangleMesh mesh;
   std::string source_sha256;  ///< hex SHA-256 of the file the model was built from (the report's
                               ///< input.cad_sha256: which CAD revision was measured against);
                               ///< empty for a model built in memory

@@ -179,7 +179,8 @@ std::optional<Error> add_deformation(const PartModel& model, const KdTree& model
                                      const ReductionOutcome& reduced, const Transform& T_cad_scan,
                                      const std::vector<Vec3>& scan_in_cad,
                                      const SpringbackResult* springback, const PipelineSettings& s,
-                                     v1::InspectionReport& report) {
+                                     InspectionOutcome& out) {
+  v1::InspectionReport& report = out.report;
   std::vector<Vec3> scan_centers;
   scan_centers.reserve(reduced.scan_centers.size());
   for (const Vec3& p : reduced.scan_centers) scan_centers.push_back(T_cad_scan * p);
@@ -208,6 +209,15 @@ std::optional<Error> add_deformation(const PartModel& model, const KdTree& model
   if (comp->clipped > 0)
     report.add_warnings("compensation: " + std::to_string(comp->clipped) + " vectors clipped to " +
                         std::to_string(s.compensation.max_magnitude_mm) + " mm");
+  // The compensated surface: every CAD tessellation vertex moved by the interpolated c.
+  if (!model.mesh.vertices.empty()) {
+    auto moved = compensation(field, model.mesh.vertices, s.compensation);
+    if (!moved) return fail(moved.message());
+    out.compensated_surface = model.mesh;
+    for (std::size_t k = 0; k < moved->vectors.size(); ++k)
+      out.compensated_surface.vertices[k] += moved->vectors[k].vector;
+  }
+  out.compensation = std::move(comp).value();
   return std::nullopt;
 }
 
@@ -271,7 +281,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
   if (auto error =
           add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud.points,
-                          springback ? &*springback : nullptr, *config, report))
+                          springback ? &*springback : nullptr, *config, out))
     return *error;
   timings.set_deformation(ms_since(t));
 

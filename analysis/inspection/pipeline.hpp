@@ -5,6 +5,7 @@
 #include "analysis/core/expected.hpp"
 #include "analysis/core/part_model.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/matching/compensation.hpp"
 #include "proto/springscan.pb.h"
 
 namespace springscan::analysis {
@@ -12,6 +13,10 @@ namespace springscan::analysis {
 struct InspectionOutcome {
   v1::InspectionReport report;  ///< every field DESIGN.md lists, timings included
   PointCloud deviation_cloud;   ///< scan points in the CAD frame, scalars = signed deviation
+  Compensation compensation;    ///< at the k-center control points (compensation.csv/.ply)
+  /// The CAD tessellation with every vertex moved by the interpolated compensation
+  /// (compensated-surface.stl); empty when the model has no mesh.
+  TriangleMesh compensated_surface;
 };
 
 /// Runs every stage on one scan. `settings` holds only overrides (proto `optional` fields);

@@ -115,37 +115,59 @@ Expected<Compensation> compensation(const DeformationField& field,
   return out;
 }
 
-Expected<std::size_t> write_compensation_csv(const std::string& path, const Compensation& c) {
-  const File f(std::fopen(path.c_str(), "w"));
-  if (!f) return fail(path + ": cannot open for writing");
-  std::fprintf(f.get(), "x_mm,y_mm,z_mm,cx_mm,cy_mm,cz_mm,magnitude_mm,supported,clipped\n");
+std::string format_compensation_csv(const Compensation& c) {
+  std::string out = "x_mm,y_mm,z_mm,cx_mm,cy_mm,cz_mm,magnitude_mm,supported,clipped\n";
+  char line[320];
   for (const auto& v : c.vectors) {
-    std::fprintf(f.get(), "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%d\n", v.point.x(), v.point.y(),
-                 v.point.z(), clean(v.vector.x()), clean(v.vector.y()), clean(v.vector.z()),
-                 v.vector.norm(), v.supported ? 1 : 0, v.clipped ? 1 : 0);
+    const int n =
+        std::snprintf(line, sizeof line, "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%d,%d\n", v.point.x(),
+                      v.point.y(), v.point.z(), clean(v.vector.x()), clean(v.vector.y()),
+                      clean(v.vector.z()), v.vector.norm(), v.supported ? 1 : 0, v.clipped ? 1 : 0);
+    out.append(line, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof line) - 1)));
   }
-  if (std::ferror(f.get())) return fail(path + ": write failed");
-  return c.vectors.size();
+  return out;
 }
 
-Expected<std::size_t> write_compensation_ply(const std::string& path, const Compensation& c) {
-  const File f(std::fopen(path.c_str(), "w"));
-  if (!f) return fail(path + ": cannot open for writing");
-  std::fprintf(f.get(),
-               "ply\nformat ascii 1.0\ncomment springscan compensation vectors, CAD frame, mm\n"
-               "element vertex %zu\nproperty double x\nproperty double y\nproperty double z\n"
-               "property float nx\nproperty float ny\nproperty float nz\nproperty float cx\n"
-               "property float cy\nproperty float cz\nproperty float magnitude\nend_header\n",
-               c.vectors.size());
+std::string format_compensation_ply(const Compensation& c) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "ply\nformat ascii 1.0\ncomment springscan compensation vectors, result frame, mm\n"
+                "element vertex %zu\nproperty double x\nproperty double y\nproperty double z\n"
+                "property float nx\nproperty float ny\nproperty float nz\nproperty float cx\n"
+                "property float cy\nproperty float cz\nproperty float magnitude\nend_header\n",
+                c.vectors.size());
+  std::string out = line;
   for (const auto& v : c.vectors) {
     const double length = v.vector.norm();
     const Vec3 dir = length > 0.0 ? Vec3(v.vector / length) : Vec3::Zero();
-    std::fprintf(f.get(), "%.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", v.point.x(),
-                 v.point.y(), v.point.z(), clean(dir.x()), clean(dir.y()), clean(dir.z()),
-                 clean(v.vector.x()), clean(v.vector.y()), clean(v.vector.z()), length);
+    const int n = std::snprintf(
+        line, sizeof line, "%.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f %.6f\n", v.point.x(),
+        v.point.y(), v.point.z(), clean(dir.x()), clean(dir.y()), clean(dir.z()),
+        clean(v.vector.x()), clean(v.vector.y()), clean(v.vector.z()), length);
+    out.append(line, static_cast<std::size_t>(std::clamp(n, 0, static_cast<int>(sizeof line) - 1)));
   }
+  return out;
+}
+
+namespace {
+
+Expected<std::size_t> write_text(const std::string& path, const std::string& text,
+                                 std::size_t rows) {
+  const File f(std::fopen(path.c_str(), "w"));
+  if (!f) return fail(path + ": cannot open for writing");
+  std::fwrite(text.data(), 1, text.size(), f.get());
   if (std::ferror(f.get())) return fail(path + ": write failed");
-  return c.vectors.size();
+  return rows;
+}
+
+}  // namespace
+
+Expected<std::size_t> write_compensation_csv(const std::string& path, const Compensation& c) {
+  return write_text(path, format_compensation_csv(c), c.vectors.size());
+}
+
+Expected<std::size_t> write_compensation_ply(const std::string& path, const Compensation& c) {
+  return write_text(path, format_compensation_ply(c), c.vectors.size());
 }
 
 }  // namespace springscan::analysis

@@ -55,6 +55,10 @@ Expected<Compensation> compensation(const DeformationField& field,
                                     const std::vector<Vec3>& control_points,
                                     const CompensationSettings& settings = {});
 
+/// The bytes of compensation.csv / compensation.ply (below), for the atomic writer.
+std::string format_compensation_csv(const Compensation& c);
+std::string format_compensation_ply(const Compensation& c);
+
 /// Writes a CSV a tool designer can load: header
 /// `x_mm,y_mm,z_mm,cx_mm,cy_mm,cz_mm,magnitude_mm,supported,clipped`, one row per vector.
 Expected<std::size_t> write_compensation_csv(const std::string& path, const Compensation& c);

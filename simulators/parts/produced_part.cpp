@@ -165,6 +165,7 @@ Expected<CadPart> load_cad_part(const std::string& path, const CadModelSettings&
   part.model.samples = std::move(*samples);
   part.model.segmentation = segment_cad(part.shape, settings.segmentation);
   part.model.face_count = part.shape.face_count();
+  part.model.mesh = tessellation(part.shape);
   return part;
 }
 

@@ -140,5 +140,32 @@ TEST(WriteFileAtomically, ReplacesContentAndCleansUp) {
   fs::remove_all(dir);
 }
 
+// Issue 17: the compensation files a tool designer loads, written with the others.
+TEST(ReportFiles, CompensationFilesAndTheCompensatedSurface) {
+  InspectionOutcome outcome = sample_outcome();
+  CompensationVector c;
+  c.point = Vec3(1.0, 2.0, 3.0);
+  c.vector = Vec3(0.0, 0.0, -0.25);
+  c.supported = true;
+  outcome.compensation.vectors.push_back(c);
+  outcome.compensated_surface.vertices = {{0, 0, 0.1}, {1, 0, 0.1}, {0, 1, 0.1}};
+  outcome.compensated_surface.triangles = {{0, 1, 2}};
+  const fs::path dir = fresh_dir("compensation_files");
+  ASSERT_TRUE(write_inspection_files(dir.string(), outcome));
+  const auto csv = read_file_bytes((dir / "compensation.csv").string());
+  ASSERT_TRUE(csv);
+  EXPECT_EQ(*csv,
+            "x_mm,y_mm,z_mm,cx_mm,cy_mm,cz_mm,magnitude_mm,supported,clipped\n"
+            "1.000000,2.000000,3.000000,0.000000,0.000000,-0.250000,0.250000,1,0\n");
+  const auto ply = read_file_bytes((dir / "compensation.ply").string());
+  ASSERT_TRUE(ply);
+  EXPECT_NE(ply->find("element vertex 1"), std::string::npos);
+  auto stl = read_surface((dir / "compensated-surface.stl").string());
+  ASSERT_TRUE(stl) << stl.message();
+  ASSERT_EQ(stl->triangles.size(), 1u);
+  for (const Vec3& p : stl->cloud.points) EXPECT_NEAR(p.z(), 0.1, 1e-6);
+  EXPECT_TRUE(leftover_temporaries(dir).empty());
+}
+
 }  // namespace
 }  // namespace springscan::analysis
