@@ -45,13 +45,13 @@ class FirstError : public google::protobuf::io::ErrorCollector {
 
 analysis::Expected<v1::AnalysisSettings> read_settings(const std::string& path) {
   auto text = analysis::read_file_bytes(path);
-  if (!text) return analysis::fail(text.message());
+  if (!text) return text.error();
   v1::AnalysisSettings settings;
   FirstError errors;
   google::protobuf::TextFormat::Parser parser;
   parser.RecordErrorsTo(&errors);
   if (!parser.ParseFromString(*text, &settings))
-    return analysis::fail(path + ":" + errors.message());
+    return analysis::fail(analysis::ErrorCode::kInvalidSettings, path + ":" + errors.message());
   return settings;
 }
 
@@ -60,17 +60,17 @@ analysis::Expected<v1::AnalysisSettings> read_settings(const std::string& path) 
 analysis::Expected<analysis::PartModel> load_cad_model(const std::string& path,
                                                        const v1::ModelSettings& m) {
   auto settings = analysis::from_proto(m);
-  if (!settings) return analysis::fail(settings.message());
+  if (!settings) return settings.error();
   return analysis::load_part_model(path, *settings);
 }
 
 analysis::Expected<analysis::PartModel> load_point_model(const std::string& path) {
   auto cloud = analysis::read_point_cloud(path);
-  if (!cloud) return analysis::fail(cloud.message());
+  if (!cloud) return cloud.error();
   auto model = analysis::part_model_from_points(*cloud);
-  if (!model) return analysis::fail(path + ": " + model.message());
+  if (!model) return model.error().prepend(path + ": ");
   auto sha256 = analysis::sha256_file(path);
-  if (!sha256) return analysis::fail(sha256.message());
+  if (!sha256) return sha256.error();
   model->model.source_sha256 = std::move(*sha256);
   return std::move(model->model);
 }

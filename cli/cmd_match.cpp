@@ -31,7 +31,7 @@ analysis::Expected<std::vector<analysis::Vec3>> reduce(const std::vector<analysi
   analysis::KCenterSettings settings;
   settings.radius_mm = w;
   auto reduced = analysis::kcenter_reduce(points, settings);
-  if (!reduced) return analysis::fail(reduced.message());
+  if (!reduced) return reduced.error();
   std::vector<analysis::Vec3> kept;
   kept.reserve(reduced->centers.size());
   for (const auto i : reduced->centers) {

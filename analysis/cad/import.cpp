@@ -68,8 +68,10 @@ Expected<TopoDS_Shape> read_exchange(const std::string& path, const char* format
   Reader reader;  // the constructor registers the format's static parameters
   Interface_Static::SetCVal("xstep.cascade.unit", "MM");
   if (reader.ReadFile(path.c_str()) != IFSelect_RetDone)
-    return fail(path + ": the file could not be parsed (not valid " + format + ")");
-  if (reader.TransferRoots() == 0) return fail(path + ": no shape could be transferred");
+    return fail(ErrorCode::kCorruption,
+                path + ": the file could not be parsed (not valid " + format + ")");
+  if (reader.TransferRoots() == 0)
+    return fail(ErrorCode::kCorruption, path + ": no shape could be transferred");
   return reader.OneShape();
 }
 
@@ -78,7 +80,8 @@ Expected<TopoDS_Shape> read_brep(const std::string& path) {
   TopoDS_Shape shape;
   BRep_Builder builder;
   BRepTools::Read(shape, in, builder);
-  if (shape.IsNull()) return fail(path + ": the file could not be parsed (not valid BRep)");
+  if (shape.IsNull())
+    return fail(ErrorCode::kCorruption, path + ": the file could not be parsed (not valid BRep)");
   return shape;
 }
 
@@ -183,9 +186,12 @@ Expected<CadShape> load_cad(const std::string& path, const CadImportSettings& se
   if (format == Format::kUnknown)
     return fail(path + ": unsupported file type (expected .igs, .iges, .stp, .step or .brep)");
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) return fail(path + ": no such file");
-  if (std::filesystem::file_size(path, ec) == 0) return fail(path + ": the file is empty");
-  if (!std::ifstream(path).good()) return fail(path + ": cannot open the file for reading");
+  if (!std::filesystem::is_regular_file(path, ec))
+    return fail(ErrorCode::kNotFound, path + ": no such file");
+  if (std::filesystem::file_size(path, ec) == 0)
+    return fail(ErrorCode::kCorruption, path + ": the file is empty");
+  if (!std::ifstream(path).good())
+    return fail(ErrorCode::kIoError, path + ": cannot open the file for reading");
   CadLoadReport report;
   report.file = path;
   report.format = format_name(format);
@@ -193,12 +199,12 @@ Expected<CadShape> load_cad(const std::string& path, const CadImportSettings& se
     auto read = read_any(path, format);
     if (!read) return read.error();
     if (read->IsNull() || !TopExp_Explorer(*read, TopAbs_FACE).More())
-      return fail(path + ": the file holds no faces");
+      return fail(ErrorCode::kCorruption, path + ": the file holds no faces");
     TopoDS_Shape shape = sew_and_heal(*read, settings, report);
     shape = apply_plausible_scale(shape, settings, report);
     return make_cad_shape(shape, report, settings);
   } catch (const Standard_Failure& e) {
-    return fail(describe_occt_failure(path, e.GetMessageString()));
+    return fail(ErrorCode::kCorruption, describe_occt_failure(path, e.GetMessageString()));
   } catch (const std::exception& e) {
     return fail(path + ": " + e.what());
   }
@@ -220,13 +226,13 @@ Expected<CadShape> cad_from_brep_text(const std::string& text, const std::string
     BRep_Builder builder;
     BRepTools::Read(shape, in, builder);
     if (shape.IsNull() || !TopExp_Explorer(shape, TopAbs_FACE).More())
-      return fail(name + ": the BRep text holds no faces");
+      return fail(ErrorCode::kCorruption, name + ": the BRep text holds no faces");
     CadLoadReport report;
     report.file = name;
     report.format = "BREP";
     return make_cad_shape(shape, report, settings);
   } catch (const Standard_Failure& e) {
-    return fail(describe_occt_failure(name, e.GetMessageString()));
+    return fail(ErrorCode::kCorruption, describe_occt_failure(name, e.GetMessageString()));
   }
 }
 

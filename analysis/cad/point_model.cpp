@@ -18,7 +18,7 @@ Expected<PointModelOutcome> part_model_from_points(const PointCloud& cloud,
   std::vector<Vec3> normals = cloud.normals;
   if (normals.empty()) {
     auto estimated = estimate_normals(cloud.points, settings.normals);
-    if (!estimated) return fail("model: " + estimated.message());
+    if (!estimated) return estimated.error().prepend("model: ");
     normals = std::move(estimated->normals);
     out.normals_estimated = true;
   }

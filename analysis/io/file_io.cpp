@@ -35,7 +35,8 @@ class Fd {
 
 // The OS reason for the call that just failed; read at once, never later (STYLE.md section 5).
 Error os_error(const std::string& what, const std::string& path) {
-  return fail(what + " '" + path + "': " + std::strerror(errno));
+  const ErrorCode code = errno == ENOENT ? ErrorCode::kNotFound : ErrorCode::kIoError;
+  return fail(code, what + " '" + path + "': " + std::strerror(errno));
 }
 
 }  // namespace
@@ -45,7 +46,8 @@ Expected<std::string> read_file_bytes(const std::string& path) {
   if (!fd.valid()) return os_error("cannot open", path);
   struct stat st {};
   if (::fstat(fd.get(), &st) != 0) return os_error("cannot stat", path);
-  if (S_ISDIR(st.st_mode)) return fail("cannot read '" + path + "': it is a directory");
+  if (S_ISDIR(st.st_mode))
+    return fail(ErrorCode::kIoError, "cannot read '" + path + "': it is a directory");
   // The size comes from the file system, not from file content, so it is safe to reserve.
   std::string bytes;
   bytes.resize(static_cast<std::size_t>(st.st_size));

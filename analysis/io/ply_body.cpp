@@ -116,8 +116,8 @@ Error PlyBody::error_at(const PlyElement& element, std::uint64_t record,
   const std::string where = format_ == PlyBodyFormat::kAscii
                                 ? "line " + std::to_string(cursor_.line())
                                 : "byte offset " + std::to_string(offset_);
-  return fail(name_ + ": " + where + ": PLY element '" + element.name + "' record " +
-              std::to_string(record) + ": " + what);
+  return fail(ErrorCode::kCorruption, name_ + ": " + where + ": PLY element '" + element.name +
+                                          "' record " + std::to_string(record) + ": " + what);
 }
 
 std::optional<Error> PlyBody::check_fits(const PlyElement& element) const {
@@ -125,23 +125,26 @@ std::optional<Error> PlyBody::check_fits(const PlyElement& element) const {
   const std::string declared = name_ + ": PLY element '" + element.name + "' (header line " +
                                std::to_string(element.header_line) + ") declares " +
                                std::to_string(element.count) + " records";
-  if (element.properties.empty()) return fail(declared + " but no properties");
+  if (element.properties.empty())
+    return fail(ErrorCode::kCorruption, declared + " but no properties");
   if (format_ == PlyBodyFormat::kAscii) {
     // Each value is at least one character and one separator (the last may lack the separator).
     const std::uint64_t min_bytes = 2 * element.properties.size();
     if (element.count > (cursor_.remaining() + 1) / min_bytes) {
-      return fail(declared + " of at least " + std::to_string(element.properties.size()) +
-                  " values but only " + std::to_string(cursor_.remaining()) +
-                  " bytes remain (line " + std::to_string(cursor_.line()) + ")");
+      return fail(ErrorCode::kCorruption,
+                  declared + " of at least " + std::to_string(element.properties.size()) +
+                      " values but only " + std::to_string(cursor_.remaining()) +
+                      " bytes remain (line " + std::to_string(cursor_.line()) + ")");
     }
     return std::nullopt;
   }
   const std::size_t record_size = element.min_record_size();
   const std::size_t remaining = bytes_.size() - offset_;
   if (element.count > remaining / record_size) {
-    return fail(declared + " of at least " + std::to_string(record_size) + " bytes but only " +
-                std::to_string(remaining) + " bytes remain after byte offset " +
-                std::to_string(offset_));
+    return fail(ErrorCode::kCorruption, declared + " of at least " + std::to_string(record_size) +
+                                            " bytes but only " + std::to_string(remaining) +
+                                            " bytes remain after byte offset " +
+                                            std::to_string(offset_));
   }
   return std::nullopt;
 }

@@ -42,7 +42,8 @@ struct HeaderLineParser {
   bool saw_format = false;
 
   Error error(std::size_t line, const std::string& what) const {
-    return fail(name + ": PLY header line " + std::to_string(line) + ": " + what);
+    return fail(ErrorCode::kCorruption,
+                name + ": PLY header line " + std::to_string(line) + ": " + what);
   }
 
   std::optional<Error> format(const std::vector<std::string_view>& w, std::size_t line) {
@@ -132,14 +133,15 @@ Expected<PlyHeader> parse_ply_header(std::string_view bytes, const std::string& 
   PlyHeader header;
   HeaderLineParser parser{name, header};
   if (!bytes.starts_with("ply\n") && !bytes.starts_with("ply\r\n")) {
-    return fail(name + ": not a PLY file (it does not start with a 'ply' line)");
+    return fail(ErrorCode::kCorruption,
+                name + ": not a PLY file (it does not start with a 'ply' line)");
   }
   std::size_t pos = bytes.find('\n') + 1;
   for (std::size_t line = 2;; ++line) {
     const std::size_t eol = bytes.find('\n', pos);
     if (eol == std::string_view::npos) {
-      return fail(name + ": PLY header has no end_header line (read " + std::to_string(line - 1) +
-                  " lines)");
+      return fail(ErrorCode::kCorruption, name + ": PLY header has no end_header line (read " +
+                                              std::to_string(line - 1) + " lines)");
     }
     std::string_view text = bytes.substr(pos, eol - pos);
     if (!text.empty() && text.back() == '\r') text.remove_suffix(1);

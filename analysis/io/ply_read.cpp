@@ -69,11 +69,13 @@ Expected<VertexLayout> vertex_layout(const PlyElement& vertex, const PointReadOp
     return seen[static_cast<int>(a)] && seen[static_cast<int>(b)] && seen[static_cast<int>(c)];
   };
   if (!all(Target::kX, Target::kY, Target::kZ)) {
-    return fail(name + ": PLY element 'vertex' (header line " + std::to_string(vertex.header_line) +
-                ") lacks property x, y or z");
+    return fail(ErrorCode::kCorruption, name + ": PLY element 'vertex' (header line " +
+                                            std::to_string(vertex.header_line) +
+                                            ") lacks property x, y or z");
   }
   if (!options.scalar_property.empty() && !seen[static_cast<int>(Target::kScalar)]) {
-    return fail(name + ": PLY element 'vertex' has no property '" + options.scalar_property + "'");
+    return fail(ErrorCode::kCorruption,
+                name + ": PLY element 'vertex' has no property '" + options.scalar_property + "'");
   }
   layout.normals = all(Target::kNx, Target::kNy, Target::kNz);
   layout.colors = all(Target::kRed, Target::kGreen, Target::kBlue);
@@ -101,18 +103,20 @@ void allocate(PointCloud& cloud, const VertexLayout& layout, std::size_t count) 
 std::optional<Error> check_finite(const PointCloud& cloud, const std::string& name) {
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     if (!cloud.points[i].allFinite()) {
-      return fail(name + ": vertex " + std::to_string(i) +
-                  " has a non-finite coordinate (NaN or Inf)");
+      return fail(ErrorCode::kCorruption, name + ": vertex " + std::to_string(i) +
+                                              " has a non-finite coordinate (NaN or Inf)");
     }
   }
   for (std::size_t i = 0; i < cloud.normals.size(); ++i) {
     if (!cloud.normals[i].allFinite()) {
-      return fail(name + ": vertex " + std::to_string(i) + " has a non-finite normal (NaN or Inf)");
+      return fail(ErrorCode::kCorruption,
+                  name + ": vertex " + std::to_string(i) + " has a non-finite normal (NaN or Inf)");
     }
   }
   for (std::size_t i = 0; i < cloud.scalars.size(); ++i) {
     if (!std::isfinite(cloud.scalars[i])) {
-      return fail(name + ": vertex " + std::to_string(i) + " has a non-finite scalar (NaN or Inf)");
+      return fail(ErrorCode::kCorruption,
+                  name + ": vertex " + std::to_string(i) + " has a non-finite scalar (NaN or Inf)");
     }
   }
   return std::nullopt;
@@ -123,8 +127,10 @@ std::optional<Error> check_indices(const Surface& surface, const std::string& na
   for (std::size_t f = 0; f < surface.triangles.size(); ++f) {
     for (auto index : surface.triangles[f]) {
       if (index >= n) {
-        return fail(name + ": triangle " + std::to_string(f) + " refers to vertex " +
-                    std::to_string(index) + " but there are " + std::to_string(n) + " vertices");
+        return fail(ErrorCode::kCorruption, name + ": triangle " + std::to_string(f) +
+                                                " refers to vertex " + std::to_string(index) +
+                                                " but there are " + std::to_string(n) +
+                                                " vertices");
       }
     }
   }
@@ -150,7 +156,8 @@ Expected<Surface> parse_ply(std::string_view bytes, const std::string& name,
   for (const auto& element : header->elements) {
     if (element.name == "vertex") vertex = &element;
   }
-  if (vertex == nullptr) return fail(name + ": PLY file has no 'vertex' element");
+  if (vertex == nullptr)
+    return fail(ErrorCode::kCorruption, name + ": PLY file has no 'vertex' element");
   auto layout = vertex_layout(*vertex, options, name);
   if (!layout) return layout.error();
 

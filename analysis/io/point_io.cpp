@@ -33,7 +33,7 @@ std::optional<PointFormat> point_format_for_path(const std::string& path) {
 
 Expected<Surface> parse_surface(std::string_view bytes, PointFormat format, const std::string& name,
                                 const PointReadOptions& options) {
-  if (bytes.empty()) return fail(name + ": empty file");
+  if (bytes.empty()) return fail(ErrorCode::kCorruption, name + ": empty file");
   switch (format) {
     case PointFormat::kPly:
       return parse_ply(bytes, name, options);
@@ -42,7 +42,7 @@ Expected<Surface> parse_surface(std::string_view bytes, PointFormat format, cons
     case PointFormat::kStl:
       return parse_stl(bytes, name);
   }
-  return fail(name + ": unknown point format");
+  return fail(ErrorCode::kCorruption, name + ": unknown point format");
 }
 
 Expected<std::string> format_surface(const Surface& surface, PointFormat format,
@@ -55,7 +55,7 @@ Expected<std::string> format_surface(const Surface& surface, PointFormat format,
     case PointFormat::kStl:
       return format_stl(surface);
   }
-  return fail("unknown point format");
+  return fail(ErrorCode::kCorruption, "unknown point format");
 }
 
 Expected<Surface> read_surface(const std::string& path, const PointReadOptions& options) {
@@ -77,7 +77,8 @@ Expected<PointCloud> read_point_cloud(const std::string& path, const PointReadOp
 Expected<TriangleMesh> read_mesh(const std::string& path) {
   auto surface = read_surface(path);
   if (!surface) return surface.error();
-  if (surface->triangles.empty()) return fail(path + ": the file has no triangles");
+  if (surface->triangles.empty())
+    return fail(ErrorCode::kCorruption, path + ": the file has no triangles");
   return to_mesh(std::move(*surface));
 }
 
@@ -86,7 +87,7 @@ Expected<bool> write_surface(const std::string& path, const Surface& surface,
   const auto format = point_format_for_path(path);
   if (!format) return unknown_extension(path);
   auto bytes = format_surface(surface, *format, options);
-  if (!bytes) return fail(path + ": " + bytes.message());
+  if (!bytes) return bytes.error().prepend(path + ": ");
   return write_file_atomically(path, *bytes);
 }
 

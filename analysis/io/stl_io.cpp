@@ -70,8 +70,9 @@ Expected<Surface> parse_binary(std::string_view bytes, std::uint64_t count,
       const char* p = record + 12 + 12 * c;  // skip the stored normal: we recompute normals
       const Vec3 corner(load_f32_le(p), load_f32_le(p + 4), load_f32_le(p + 8));
       if (!corner.allFinite()) {
-        return fail(name + ": byte offset " + std::to_string(p - bytes.data()) + ": triangle " +
-                    std::to_string(t) + " has a non-finite corner (NaN or Inf)");
+        return fail(ErrorCode::kCorruption,
+                    name + ": byte offset " + std::to_string(p - bytes.data()) + ": triangle " +
+                        std::to_string(t) + " has a non-finite corner (NaN or Inf)");
       }
       triangle[c] = welder.add(corner);
     }
@@ -161,7 +162,8 @@ class AsciiStlParser {
   }
 
   Error error(const std::string& what) const {
-    return fail(name_ + ": line " + std::to_string(cursor_.line()) + ": " + what);
+    return fail(ErrorCode::kCorruption,
+                name_ + ": line " + std::to_string(cursor_.line()) + ": " + what);
   }
 
   TextCursor cursor_;
@@ -178,22 +180,24 @@ bool starts_with_solid(std::string_view bytes) {
 }  // namespace
 
 Expected<Surface> parse_stl(std::string_view bytes, const std::string& name) {
-  if (bytes.empty()) return fail(name + ": empty file");
+  if (bytes.empty()) return fail(ErrorCode::kCorruption, name + ": empty file");
   if (bytes.size() >= kHeaderBytes) {
     const std::uint64_t count = load_u32_le(bytes.data() + 80);
     const std::uint64_t needed = kHeaderBytes + kRecordBytes * count;
     if (needed == bytes.size()) return parse_binary(bytes, count, name);
     if (!starts_with_solid(bytes)) {
       if (needed > bytes.size()) {
-        return fail(name + ": binary STL declares " + std::to_string(count) + " triangles (needs " +
-                    std::to_string(needed) + " bytes) but the file has " +
-                    std::to_string(bytes.size()) + " bytes");
+        return fail(ErrorCode::kCorruption,
+                    name + ": binary STL declares " + std::to_string(count) + " triangles (needs " +
+                        std::to_string(needed) + " bytes) but the file has " +
+                        std::to_string(bytes.size()) + " bytes");
       }
       return parse_binary(bytes, count, name);  // trailing bytes after the records are ignored
     }
   } else if (!starts_with_solid(bytes)) {
-    return fail(name + ": not an STL file (" + std::to_string(bytes.size()) +
-                " bytes: too short for binary, and no 'solid')");
+    return fail(ErrorCode::kCorruption, name + ": not an STL file (" +
+                                            std::to_string(bytes.size()) +
+                                            " bytes: too short for binary, and no 'solid')");
   }
   return AsciiStlParser(bytes, name).parse();
 }

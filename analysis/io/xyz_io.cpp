@@ -96,7 +96,7 @@ class XyzParser {
   }
 
   Error error(std::size_t number, const std::string& what) const {
-    return fail(name_ + ": line " + std::to_string(number) + ": " + what);
+    return fail(ErrorCode::kCorruption, name_ + ": line " + std::to_string(number) + ": " + what);
   }
 
   const std::string& name_;
@@ -109,8 +109,8 @@ class XyzParser {
 
 Expected<Surface> parse_xyz(std::string_view text, const std::string& name) {
   if (text.find('\0') != std::string_view::npos) {
-    return fail(name + ": byte offset " + std::to_string(text.find('\0')) +
-                ": NUL byte in a text point file (binary data?)");
+    return fail(ErrorCode::kCorruption, name + ": byte offset " + std::to_string(text.find('\0')) +
+                                            ": NUL byte in a text point file (binary data?)");
   }
   XyzParser parser(name);
   std::size_t number = 1;
@@ -121,7 +121,8 @@ Expected<Surface> parse_xyz(std::string_view text, const std::string& name) {
     pos = eol + 1;
   }
   Surface surface = parser.finish();
-  if (surface.cloud.empty()) return fail(name + ": no points (empty file or only comments)");
+  if (surface.cloud.empty())
+    return fail(ErrorCode::kCorruption, name + ": no points (empty file or only comments)");
   return surface;
 }
 

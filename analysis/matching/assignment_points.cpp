@@ -168,7 +168,7 @@ Expected<PointMatching> match_points(const std::vector<Vec3>& model, const std::
   const bool sparse = largest > static_cast<std::size_t>(settings.dense_limit);
   if (!sparse || !solve_sparse_priced(rows, tree, settings, out)) {
     auto solved = solve_dense_points(rows, tree.points());
-    if (!solved.ok()) return fail("matching: " + solved.message());
+    if (!solved.ok()) return solved.error().prepend("matching: ");
     out.assignment = std::move(solved).value();
     out.used_dense = true;
     const double tol = tolerance_for(out.assignment, settings.relative_tolerance);

@@ -80,7 +80,7 @@ Expected<DeformationField> deformation_field(const std::vector<Vec3>& model,
     field.vectors = nearest;
   } else {
     auto matched = match_points(model, scan, settings.matching);
-    if (!matched.ok()) return fail("deformation field: " + matched.message());
+    if (!matched.ok()) return matched.error().prepend("deformation field: ");
     field.matching = std::move(matched).value();
     field.optimality_certified = field.matching.certified;
     for (std::size_t i = 0; i < model.size(); ++i) {

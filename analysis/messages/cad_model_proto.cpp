@@ -31,7 +31,8 @@ Expected<PointCloud> samples_from_proto(const v1::PointCloud& in) {
   if (static_cast<std::size_t>(in.xyz_size()) != 3 * n ||
       (in.normals_size() != 0 && in.normals_size() != in.xyz_size()) ||
       (in.face_ids_size() != 0 && static_cast<std::size_t>(in.face_ids_size()) != n))
-    return fail("cached model: samples: inconsistent xyz/normals/face_ids sizes");
+    return fail(ErrorCode::kCorruption,
+                "cached model: samples: inconsistent xyz/normals/face_ids sizes");
   PointCloud cloud;
   cloud.points.reserve(n);
   for (std::size_t i = 0; i < n; ++i)
@@ -88,7 +89,8 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
   const auto valid = [&](int id) { return id >= 0 && id < model.face_count; };
   for (int id : model.samples.face_ids)
     if (!valid(id))
-      return fail("cached model: sample face id " + std::to_string(id) + " out of range");
+      return fail(ErrorCode::kCorruption,
+                  "cached model: sample face id " + std::to_string(id) + " out of range");
   for (const auto& m : message.flanges()) {
     Flange f;
     f.id = m.id();
@@ -133,21 +135,23 @@ std::string apply_range(bool present, double value, double lo, double hi, const 
 Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModelSettings settings) {
   if (message.has_sample_count()) {
     if (message.sample_count() < 100 || message.sample_count() > 10'000'000)
-      return fail("settings: model.sample_count = " + std::to_string(message.sample_count()) +
-                  " (allowed: 100 to 10000000)");
+      return fail(ErrorCode::kInvalidSettings,
+                  "settings: model.sample_count = " + std::to_string(message.sample_count()) +
+                      " (allowed: 100 to 10000000)");
     settings.sampling.sample_count = message.sample_count();
   }
   if (message.has_linear_deflection_mm()) {
     if (!(message.linear_deflection_mm() > 0.0) || !std::isfinite(message.linear_deflection_mm()))
-      return fail("settings: model.linear_deflection_mm = " +
-                  std::to_string(message.linear_deflection_mm()) + " (must be > 0)");
+      return fail(ErrorCode::kInvalidSettings, "settings: model.linear_deflection_mm = " +
+                                                   std::to_string(message.linear_deflection_mm()) +
+                                                   " (must be > 0)");
     settings.import.linear_deflection_mm = message.linear_deflection_mm();
   }
   if (message.has_angular_deflection_deg()) {
     const double value = message.angular_deflection_deg();
     if (!(value > 0.0 && value < 90.0))
-      return fail("settings: model.angular_deflection_deg = " + std::to_string(value) +
-                  " (must be in (0, 90))");
+      return fail(ErrorCode::kInvalidSettings, "settings: model.angular_deflection_deg = " +
+                                                   std::to_string(value) + " (must be in (0, 90))");
     settings.import.angular_deflection_deg = value;
   }
   CadImportSettings& im = settings.import;

@@ -9,7 +9,8 @@ namespace springscan::analysis {
 namespace {
 
 Error bad(const std::string& field, double value, const std::string& rule) {
-  return fail("settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
+  return fail(ErrorCode::kInvalidSettings,
+              "settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
 }
 
 void set_vec(const Vec3& p, v1::Vec3* out) {

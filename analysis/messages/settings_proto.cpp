@@ -8,7 +8,8 @@ namespace springscan::analysis {
 namespace {
 
 Error bad(const std::string& field, double value, const std::string& rule) {
-  return fail("settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
+  return fail(ErrorCode::kInvalidSettings,
+              "settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
 }
 
 bool in_range(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }

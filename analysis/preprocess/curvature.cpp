@@ -74,7 +74,7 @@ Expected<CurvatureReduction> reduce_by_curvature(const PointCloud& cloud,
   }
   if (settings.base_kcenter_radius_mm > 0.0) {
     auto base = kcenter_reduce(cloud.points, {0, settings.base_kcenter_radius_mm, 0, 128});
-    if (!base) return fail("curvature: " + base.message());
+    if (!base) return base.error().prepend("curvature: ");
     for (auto i : base->centers) keep[i] = 1;
   }
   for (std::size_t i = 0; i < cloud.size(); ++i)

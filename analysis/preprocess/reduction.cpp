@@ -58,14 +58,14 @@ Expected<ReductionOutcome> reduce(const PointCloud& scan, const PointCloud& mode
   if (!(out.voxel_size_mm > 0.0)) out.voxel_size_mm = 1.0;  // all scan points coincide
   // Voxel centroids: one fit point per occupied cell, noise averaged, density evened out.
   auto voxels = voxel_reduce(scan, {out.voxel_size_mm});
-  if (!voxels) return fail("reduce: scan " + voxels.message());
+  if (!voxels) return voxels.error().prepend("reduce: scan ");
   out.scan_for_fit =
       drop_sparse_voxels(*voxels, settings.min_voxel_fill, out.sparse_voxels_dropped);
   // Paper §2: k-center with the same threshold w on both sets gives similar distributions.
   auto model_kc = kcenter_reduce(model_samples.points, settings.kcenter);
-  if (!model_kc) return fail("reduce: model " + model_kc.message());
+  if (!model_kc) return model_kc.error().prepend("reduce: model ");
   auto scan_kc = kcenter_reduce(out.scan_for_fit.points, settings.kcenter);
-  if (!scan_kc) return fail("reduce: scan " + scan_kc.message());
+  if (!scan_kc) return scan_kc.error().prepend("reduce: scan ");
   out.model_centers = pick(model_samples.points, model_kc->centers);
   out.scan_centers = pick(out.scan_for_fit.points, scan_kc->centers);
   out.model_covering_radius_mm = model_kc->covering_radius_mm;
