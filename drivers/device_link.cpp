@@ -7,7 +7,14 @@ namespace springscan::drivers {
 namespace {
 
 namespace p = protocol;
+using analysis::ErrorCode;
 using analysis::fail;
+
+// DecodeStatus of a frame the decoder threw away: a CRC failure is kBadCrc (§2.2); a header
+// with an impossible length or version is a protocol error.
+ErrorCode decode_error_code(DecodeStatus status) {
+  return status == DecodeStatus::kBadCrc ? ErrorCode::kBadCrc : ErrorCode::kProtocolError;
+}
 
 }  // namespace
 
@@ -16,7 +23,7 @@ DeviceLink::DeviceLink(const LinkSettings& settings) : settings_(settings) {
   if (transport) {
     transport_ = std::move(transport.value());
   } else {
-    create_error_ = transport.message();
+    create_error_ = transport.error();
   }
 }
 
@@ -37,20 +44,20 @@ bool DeviceLink::online() const { return transport_ && transport_->online(); }
 UsbStats DeviceLink::usb_stats() const { return transport_ ? transport_->stats() : UsbStats{}; }
 
 analysis::Expected<Identity> DeviceLink::connect() {
-  if (!transport_) return fail(create_error_);
+  if (!transport_) return create_error_;
   if (online() && identity_) return *identity_;
   // An unplugged device leaves a stale handle: close it before enumerating again (notes §3).
   transport_->close();
   identity_.reset();
   if (const UsbError e = transport_->open(); e != UsbError::kOk)
-    return fail(who() + ": " + to_string(e) + " (" + transport_->detail() + ")");
+    return fail(to_error_code(e), who() + ": " + to_string(e) + " (" + transport_->detail() + ")");
   decoder_.reset();
   sequence_.reset();
   consecutive_timeouts_ = 0;
   auto reply = request(p::MessageType::kIdentify, {}, p::MessageType::kIdentity);
   if (!reply) return reply.error();
   auto id = decode_identity(reply->payload);
-  if (!id) return fail(who() + ": " + id.message());
+  if (!id) return id.error().prepend(who() + ": ");
   identity_ = *id;
   return id;
 }
@@ -70,7 +77,7 @@ analysis::Error DeviceLink::transport_error(UsbError error, const std::string& d
     transport_->close();
     identity_.reset();
   }
-  return fail(message + " (" + transport_->detail() + ")");
+  return fail(to_error_code(error), message + " (" + transport_->detail() + ")");
 }
 
 analysis::Expected<FrameView> DeviceLink::next_frame(int timeout_ms, bool count_timeout) {
@@ -82,13 +89,15 @@ analysis::Expected<FrameView> DeviceLink::next_frame(int timeout_ms, bool count_
       const auto seq = sequence_.check(frame.header.sequence);
       if (seq == SequenceChecker::Result::kRepeat) continue;  // a duplicate (§2.5)
       if (seq == SequenceChecker::Result::kGap)
-        return fail(who() + ": sequence gap before frame " + std::to_string(frame.header.sequence) +
-                    ", " + std::to_string(sequence_.last_gap()) + " frame(s) lost");
+        return fail(ErrorCode::kSequenceGap,
+                    who() + ": sequence gap before frame " + std::to_string(frame.header.sequence) +
+                        ", " + std::to_string(sequence_.last_gap()) + " frame(s) lost");
       consecutive_timeouts_ = 0;
       return frame;
     }
     if (status != DecodeStatus::kNeedMore)
-      return fail(who() + ": corrupt frame on bulk IN (" + to_string(status) + ")");
+      return fail(decode_error_code(status),
+                  who() + ": corrupt frame on bulk IN (" + to_string(status) + ")");
     rx_.clear();
     const UsbError e = transport_->read(rx_, timeout_ms);
     if (e == UsbError::kOk) {
@@ -97,7 +106,8 @@ analysis::Expected<FrameView> DeviceLink::next_frame(int timeout_ms, bool count_
     }
     if (e == UsbError::kTimeout && !count_timeout) {
       last_usb_error_ = e;
-      return fail(who() + ": no frame within " + std::to_string(timeout_ms) + " ms");
+      return fail(ErrorCode::kTimeout,
+                  who() + ": no frame within " + std::to_string(timeout_ms) + " ms");
     }
     if (e == UsbError::kTimeout && ++consecutive_timeouts_ >= settings_.max_consecutive_timeouts) {
       consecutive_timeouts_ = 0;
@@ -117,11 +127,12 @@ analysis::Expected<FrameView> DeviceLink::request(p::MessageType command, ByteSp
     if (frame->header.type == reply) return frame;
     if (frame->header.type == p::MessageType::kError) {
       auto e = decode_error(frame->payload);
-      if (!e) return fail(who() + ": " + e.message());
+      if (!e) return e.error().prepend(who() + ": ");
       if (e->command_sequence != sequence) continue;  // an error about an older command
-      return fail(who() + ": device error " + std::to_string(e->code) + " (" +
-                  to_string(static_cast<p::DeviceErrorCode>(e->code)) + ") to " +
-                  to_string(command) + ": " + e->message);
+      return fail(ErrorCode::kDeviceFault, who() + ": device error " + std::to_string(e->code) +
+                                               " (" +
+                                               to_string(static_cast<p::DeviceErrorCode>(e->code)) +
+                                               ") to " + to_string(command) + ": " + e->message);
     }
     // Data left over from an aborted scan: skip it until the reply arrives.
   }
@@ -161,12 +172,14 @@ analysis::Expected<FrameView> DeviceLink::next_scan_frame(const ScanProgress& pr
         consecutive_timeouts_ = 0;
         transport_->reset();
       }
-      return fail(who() + ": timeout while waiting " + std::to_string(settings_.data_timeout_ms) +
-                  " ms for a frame");
+      return fail(ErrorCode::kTimeout, who() + ": timeout while waiting " +
+                                           std::to_string(settings_.data_timeout_ms) +
+                                           " ms for a frame");
     }
     auto frame = next_frame(static_cast<int>(std::min(left, slice_ms)), false);
     if (frame || last_usb_error_ != UsbError::kTimeout) return frame;
-    if (progress && !progress(done)) return fail(who() + ": scan cancelled while waiting for data");
+    if (progress && !progress(done))
+      return fail(ErrorCode::kCancelled, who() + ": scan cancelled while waiting for data");
   }
 }
 
@@ -178,7 +191,8 @@ void DeviceLink::resync() {
     auto frame = next_frame(settings_.resync_quiet_ms);
     if (!frame) {
       if (!online()) return;
-      if (last_usb_error_ == UsbError::kTimeout) break;
+      // Quiet (timeout), or a transport failure that draining cannot fix (a stuck halt).
+      if (last_usb_error_ != UsbError::kOk) break;
       continue;  // corrupt or out-of-sequence leftovers: keep draining
     }
     // The stop's reply, or its error when the scan had already ended.
@@ -200,7 +214,7 @@ analysis::Expected<ScanOutcome> DeviceLink::scan(p::MessageType data_type,
     return reply.error();
   }
   auto started = decode_scan_started(reply->payload);
-  if (!started) return fail(who() + ": " + started.message());
+  if (!started) return started.error().prepend(who() + ": ");
   ScanOutcome outcome;
   outcome.started = *started;
   last_started_ = *started;
@@ -215,35 +229,46 @@ analysis::Expected<ScanOutcome> DeviceLink::scan(p::MessageType data_type,
     auto frame = next_scan_frame(progress, std::min(so_far, 1.0));
     const std::string at = " at frame " + std::to_string(outcome.frames_received) + " of " +
                            std::to_string(outcome.started.expected_frames);
-    if (!frame) return abort(fail(frame.message() + at + "; scan aborted, no partial result"));
+    if (!frame)
+      return abort(fail(frame.code(), frame.message() + at + "; scan aborted, no partial result"));
     const p::MessageType type = frame->header.type;
     if (type == data_type) {
       if (++outcome.frames_received > outcome.started.expected_frames)
-        return abort(fail(who() + ": more data frames than the " +
-                          std::to_string(outcome.started.expected_frames) + " announced"));
-      if (auto error = handler(*frame)) return abort(fail(who() + ": " + error->message + at));
+        return abort(fail(ErrorCode::kProtocolError,
+                          who() + ": more data frames than the " +
+                              std::to_string(outcome.started.expected_frames) + " announced"));
+      // The handler's code says what was wrong with the frame (kSequenceGap for a profile out
+      // of order, kProtocolError for a bad payload).
+      if (auto error = handler(*frame)) {
+        auto wrapped = error->prepend(who() + ": ");
+        wrapped.message += at + "; scan aborted, no partial result";
+        return abort(wrapped);
+      }
       const double done = outcome.started.expected_frames == 0
                               ? 1.0
                               : double(outcome.frames_received) / outcome.started.expected_frames;
       if (progress && !progress(std::min(done, 1.0)))
-        return abort(fail(who() + ": scan cancelled" + at));
+        return abort(fail(ErrorCode::kCancelled, who() + ": scan cancelled" + at));
     } else if (type == p::MessageType::kEndOfScan) {
       auto summary = decode_end_of_scan(frame->payload);
-      if (!summary) return abort(fail(who() + ": " + summary.message()));
+      if (!summary) return abort(summary.error().prepend(who() + ": "));
       outcome.summary = *summary;
       if (summary->dropped_frames != 0 || summary->data_frames != outcome.frames_received)
-        return fail(who() + ": scan incomplete: device sent " +
-                    std::to_string(summary->data_frames) + " frames and dropped " +
-                    std::to_string(summary->dropped_frames) + ", host received " +
-                    std::to_string(outcome.frames_received));
+        return fail(ErrorCode::kSequenceGap,
+                    who() + ": scan incomplete: device sent " +
+                        std::to_string(summary->data_frames) + " frames and dropped " +
+                        std::to_string(summary->dropped_frames) + ", host received " +
+                        std::to_string(outcome.frames_received));
       return outcome;
     } else if (type == p::MessageType::kError) {
       auto e = decode_error(frame->payload);
-      return abort(fail(who() + ": device error " +
-                        (e ? std::to_string(e->code) + " (" + e->message + ")" : e.message()) +
-                        at));
+      return abort(fail(ErrorCode::kDeviceFault,
+                        who() + ": device error " +
+                            (e ? std::to_string(e->code) + " (" + e->message + ")" : e.message()) +
+                            at));
     } else {
-      return abort(fail(who() + ": unexpected " + to_string(type) + " frame" + at));
+      return abort(fail(ErrorCode::kProtocolError,
+                        who() + ": unexpected " + to_string(type) + " frame" + at));
     }
   }
 }

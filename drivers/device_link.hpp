@@ -85,7 +85,7 @@ class DeviceLink {
 
   LinkSettings settings_;
   std::unique_ptr<UsbTransport> transport_;
-  std::string create_error_;
+  analysis::Error create_error_;  // why the transport could not be created
   FrameDecoder decoder_;
   SequenceChecker sequence_;
   std::vector<std::uint8_t> rx_;

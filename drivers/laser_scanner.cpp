@@ -4,6 +4,7 @@ namespace springscan::drivers {
 namespace {
 
 namespace p = protocol;
+using analysis::ErrorCode;
 using analysis::fail;
 
 }  // namespace
@@ -19,13 +20,15 @@ analysis::Expected<DeviceInfo> LaserLineScanner::identify() {
   auto id = link_.connect();
   if (!id) return id.error();
   if (id->kind != p::ScannerKind::kLaserLine)
-    return fail("scanner " + id->serial + ": is a " + to_string(id->kind) +
-                ", the laser line driver needs a laser_line scanner");
+    return fail(ErrorCode::kInvalidSettings,
+                "scanner " + id->serial + ": is a " + to_string(id->kind) +
+                    ", the laser line driver needs a laser_line scanner");
   return to_device_info(*id);
 }
 
 analysis::Expected<analysis::PointCloud> LaserLineScanner::scan(const ScanProgress& progress) {
-  if (const std::string bad = validate(settings_.calibration); !bad.empty()) return fail(bad);
+  if (const std::string bad = validate(settings_.calibration); !bad.empty())
+    return fail(ErrorCode::kInvalidSettings, bad);
   auto info = identify();
   if (!info) return info.error();
   if (settings_.device_config) {
@@ -38,8 +41,9 @@ analysis::Expected<analysis::PointCloud> LaserLineScanner::scan(const ScanProgre
     auto profile = decode_laser_profile(frame.payload);
     if (!profile) return profile.error();
     if (profile->index != next_index)
-      return fail("profile " + std::to_string(profile->index) + " out of order, expected " +
-                  std::to_string(next_index));
+      return fail(ErrorCode::kSequenceGap, "profile " + std::to_string(profile->index) +
+                                               " out of order, expected " +
+                                               std::to_string(next_index));
     ++next_index;
     if (!reserved) {
       // Bounded by the §6 limit, checked when the scan-started reply was decoded.
@@ -47,7 +51,8 @@ analysis::Expected<analysis::PointCloud> LaserLineScanner::scan(const ScanProgre
       reserved = true;
     }
     if (cloud.points.size() + profile->count > p::kMaxScanPoints)
-      return fail("scan exceeds " + std::to_string(p::kMaxScanPoints) + " points (§6)");
+      return fail(ErrorCode::kProtocolError,
+                  "scan exceeds " + std::to_string(p::kMaxScanPoints) + " points (§6)");
     append_laser_profile(*profile, settings_.calibration, cloud.points);
     return std::nullopt;
   };

@@ -9,7 +9,11 @@ namespace springscan::drivers {
 namespace {
 
 namespace p = protocol;
-using analysis::fail;
+
+// Every decode failure here means the device sent a payload the protocol does not allow.
+analysis::Error fail(std::string message) {
+  return analysis::fail(analysis::ErrorCode::kProtocolError, std::move(message));
+}
 
 void put_text(std::uint8_t* out, std::size_t field_bytes, const std::string& text) {
   // NUL-padded, always NUL-terminated (§3.1).

@@ -6,7 +6,10 @@
 namespace springscan::drivers {
 namespace {
 
-using analysis::fail;
+// Every failure here is a config field out of range.
+analysis::Error fail(std::string message) {
+  return analysis::fail(analysis::ErrorCode::kInvalidSettings, std::move(message));
+}
 
 // VID/PID/serial/timeout shared by both kinds; `product_id` is the kind's default PID.
 analysis::Expected<LinkSettings> link_from_proto(const v1::ScannerConfig& c,

@@ -6,6 +6,7 @@ namespace springscan::drivers {
 namespace {
 
 namespace p = protocol;
+using analysis::ErrorCode;
 using analysis::fail;
 
 }  // namespace
@@ -17,8 +18,9 @@ analysis::Expected<DeviceInfo> TactileProbeScanner::identify() {
   auto id = link_.connect();
   if (!id) return id.error();
   if (id->kind != p::ScannerKind::kTactileProbe)
-    return fail("scanner " + id->serial + ": is a " + to_string(id->kind) +
-                ", the tactile driver needs a tactile_probe");
+    return fail(ErrorCode::kInvalidSettings, "scanner " + id->serial + ": is a " +
+                                                 to_string(id->kind) +
+                                                 ", the tactile driver needs a tactile_probe");
   return to_device_info(*id);
 }
 
@@ -34,11 +36,13 @@ analysis::Expected<analysis::PointCloud> TactileProbeScanner::scan(const ScanPro
     auto batch = decode_probe_batch(frame.payload);
     if (!batch) return batch.error();
     if (batch->first_index != next_index)
-      return fail("probe point " + std::to_string(batch->first_index) + " out of order, expected " +
-                  std::to_string(next_index));
+      return fail(ErrorCode::kSequenceGap, "probe point " + std::to_string(batch->first_index) +
+                                               " out of order, expected " +
+                                               std::to_string(next_index));
     next_index += batch->count;
     if (cloud.points.size() + batch->count > p::kMaxScanPoints)
-      return fail("scan exceeds " + std::to_string(p::kMaxScanPoints) + " points (§6)");
+      return fail(ErrorCode::kProtocolError,
+                  "scan exceeds " + std::to_string(p::kMaxScanPoints) + " points (§6)");
     append_probe_batch(*batch, settings_.calibration, cloud.points,
                        settings_.with_normals ? &cloud.normals : nullptr);
     return std::nullopt;

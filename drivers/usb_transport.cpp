@@ -66,6 +66,28 @@ UsbError usb_error_from_libusb(int code) {
   }
 }
 
+analysis::ErrorCode to_error_code(UsbError error) {
+  using analysis::ErrorCode;
+  switch (error) {
+    case UsbError::kOk:
+      return ErrorCode::kInternal;  // not an error: a caller mixed up its branches
+    case UsbError::kNotFound:
+      return ErrorCode::kNotFound;
+    case UsbError::kNoDevice:
+      return ErrorCode::kDeviceGone;
+    case UsbError::kTimeout:
+      return ErrorCode::kTimeout;
+    case UsbError::kPipe:
+      return ErrorCode::kStalledEndpoint;
+    case UsbError::kAccess:
+    case UsbError::kBusy:
+    case UsbError::kOverflow:
+    case UsbError::kIo:
+      return ErrorCode::kOsError;
+  }
+  return ErrorCode::kInternal;
+}
+
 struct UsbTransport::Impl {
   usb::ContextPtr context;
   usb::HotplugRegistration hotplug;
@@ -76,18 +98,21 @@ struct UsbTransport::Impl {
 analysis::Expected<std::unique_ptr<UsbTransport>> UsbTransport::create(
     const UsbSettings& settings) {
   if (settings.transfers_in_flight < 1 || settings.transfers_in_flight > 16)
-    return analysis::fail("usb settings: transfers_in_flight " +
-                          std::to_string(settings.transfers_in_flight) + " outside 1..16");
+    return analysis::fail(analysis::ErrorCode::kInvalidSettings,
+                          "usb settings: transfers_in_flight " +
+                              std::to_string(settings.transfers_in_flight) + " outside 1..16");
   if (settings.transfer_bytes < protocol::kMaxPacketSize ||
       settings.transfer_bytes % protocol::kMaxPacketSize != 0 || settings.transfer_bytes > 1 << 20)
-    return analysis::fail("usb settings: transfer_bytes " +
-                          std::to_string(settings.transfer_bytes) +
-                          " must be a multiple of 512 up to 1 MiB");
+    return analysis::fail(analysis::ErrorCode::kInvalidSettings,
+                          "usb settings: transfer_bytes " +
+                              std::to_string(settings.transfer_bytes) +
+                              " must be a multiple of 512 up to 1 MiB");
   auto impl = std::make_unique<Impl>();
   libusb_context* raw = nullptr;
   // An explicit context, never the default one (STYLE.md §6).
   if (const int rc = libusb_init(&raw); rc != LIBUSB_SUCCESS)
-    return analysis::fail(std::string("libusb_init: ") + libusb_error_name(rc));
+    return analysis::fail(analysis::ErrorCode::kOsError,
+                          std::string("libusb_init: ") + libusb_error_name(rc));
   impl->context.reset(raw);
   auto transport = std::unique_ptr<UsbTransport>(new UsbTransport(std::move(impl), settings));
   if (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
@@ -182,7 +207,11 @@ UsbError UsbTransport::read(std::vector<std::uint8_t>& out, int timeout_ms) {
       // STALL: clear the halt here, outside the callback, then resubmit (notes §3).
       const int rc = libusb_clear_halt(dev.handle(), settings_.endpoint_in);
       if (rc == LIBUSB_ERROR_NO_DEVICE) dev.mark_gone();
-      if (rc != LIBUSB_SUCCESS) return fail(usb_error_from_libusb(rc), "clear halt on 0x81", rc);
+      // A halt that cannot be cleared leaves the endpoint stalled (kPipe), whatever libusb
+      // calls the failure (usbfs reports most CLEAR_HALT errors as LIBUSB_ERROR_OTHER).
+      if (rc != LIBUSB_SUCCESS)
+        return fail(rc == LIBUSB_ERROR_NO_DEVICE ? UsbError::kNoDevice : UsbError::kPipe,
+                    "clear halt on 0x81", rc);
       ++stats_.stalls_cleared;
       if (const int rs = dev.resubmit_idle(); rs != LIBUSB_SUCCESS)
         return fail(usb_error_from_libusb(rs), "resubmitting bulk IN after a stall", rs);

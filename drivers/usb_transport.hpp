@@ -21,7 +21,9 @@
 
 namespace springscan::drivers {
 
-/// Transport outcomes, with buckets for libusb's own errors (STYLE.md §5).
+/// Transport outcomes, with buckets for libusb's own errors (STYLE.md §5). This enum stays
+/// inside the driver; to_error_code() maps it onto the shared analysis::ErrorCode, which is what
+/// crosses the Scanner interface (the daemon and the CLI see one Error type from every layer).
 enum class UsbError {
   kOk,
   kNotFound,  ///< no device with that VID/PID/serial
@@ -29,7 +31,7 @@ enum class UsbError {
   kBusy,      ///< interface claimed by another program
   kNoDevice,  ///< the device went away
   kTimeout,   ///< nothing arrived in time
-  kPipe,      ///< an endpoint stalled and could not be cleared
+  kPipe,      ///< an endpoint stalled and could not be cleared (clear-halt failed)
   kOverflow,  ///< the device sent more than a transfer could hold; data was lost
   kIo,        ///< any other libusb failure
 };
@@ -37,6 +39,10 @@ enum class UsbError {
 std::string to_string(UsbError error);
 /// Maps a libusb_error code to the bucket it belongs to.
 UsbError usb_error_from_libusb(int code);
+/// The shared code of a transport outcome (docs/device-protocol.md §7): kNotFound -> kNotFound,
+/// kNoDevice -> kDeviceGone, kTimeout -> kTimeout, kPipe -> kStalledEndpoint, kAccess, kBusy,
+/// kOverflow and kIo -> kOsError. kOk is not an error: kInternal.
+analysis::ErrorCode to_error_code(UsbError error);
 
 struct UsbSettings {
   std::uint16_t vendor_id = protocol::kVendorId;         ///< idVendor to match

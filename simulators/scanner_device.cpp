@@ -168,6 +168,10 @@ void ScannerDevice::produce_due_frames() {
     }
     if (fault_due(f.halt_at_fraction)) event_ = DeviceEvent::kHaltIn;
     if (fault_due(f.wrong_sequence_at_fraction)) ++sequence_;
+    if (fault_due(f.skip_frame_at_fraction)) {
+      ++next_frame_;  // measured but never sent: the data index jumps, the sequence does not
+      continue;
+    }
     const std::size_t start = out_.size();
     emit(type, frames_[next_frame_]);
     if (fault_due(f.corrupt_crc_at_fraction)) out_[start + p::kHeaderBytes + 2] ^= 0x5A;

@@ -26,6 +26,12 @@ struct DeviceFaults {
   double halt_at_fraction = -1.0;            ///< the bulk IN endpoint halts (STALL) once
   double corrupt_crc_at_fraction = -1.0;     ///< one data frame goes out with a bad CRC
   double wrong_sequence_at_fraction = -1.0;  ///< one data frame skips a sequence number
+  /// One data frame is never sent while the frame sequence numbers stay contiguous: the host
+  /// sees the next profile (or probe batch) index, "profile N out of order".
+  double skip_frame_at_fraction = -1.0;
+  /// With halt_at_fraction: the halt cannot be cleared (CLEAR_HALT fails with EPIPE) until the
+  /// device is reset or plugged in again; the host sees a stalled endpoint.
+  bool halt_sticks = false;
 };
 
 struct ScannerDeviceSettings {
@@ -55,6 +61,8 @@ class ScannerDevice {
   std::size_t send(std::vector<std::uint8_t>& out, std::size_t max_bytes);
   /// A fault that the USB layer has to carry out (unplug, endpoint halt); cleared when read.
   DeviceEvent take_event();
+  /// The endpoint halt of this device cannot be cleared (DeviceFaults::halt_sticks).
+  bool halt_sticks() const { return settings_.faults.halt_sticks; }
 
   bool scanning() const { return scanning_; }
   std::uint32_t scans_started() const { return scan_id_; }

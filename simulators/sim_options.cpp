@@ -47,6 +47,7 @@ std::map<std::string, double*> number_options(SimOptions& o) {
           {"halt-at", &d.faults.halt_at_fraction},
           {"corrupt-at", &d.faults.corrupt_crc_at_fraction},
           {"wrong-seq-at", &d.faults.wrong_sequence_at_fraction},
+          {"skip-frame-at", &d.faults.skip_frame_at_fraction},
           {"replug-after", &o.replug_after_s}};
 }
 
@@ -67,7 +68,8 @@ std::string sim_usage() {
          "  --duration S            scan duration (default 0: as fast as read)\n"
          "  --step MM, --points N   laser: profile spacing, points per profile\n"
          "  --grid MM, --stylus MM  tactile: grid spacing, stylus radius\n"
-         "  --unplug-at F, --stall-at F, --halt-at F, --corrupt-at F, --wrong-seq-at F\n"
+         "  --unplug-at F, --stall-at F, --halt-at F, --corrupt-at F, --wrong-seq-at F,\n"
+         "  --skip-frame-at F\n"
          "                          faults at a share of the scan's data frames\n"
          "  --replug-after S        plug back S seconds after an unplug (default 1, <0 never)\n"
          "  --seed N                noise seed (default 1)\n";

@@ -182,6 +182,7 @@ void EmulatedUsbScanner::Impl::handle_ioctl_locked(UMockdevIoctlClient* client) 
     }
     case USBDEVFS_CLEAR_HALT:
       if (!live) return complete(client, -1, ENODEV);
+      if (in_halted && device && device->halt_sticks()) return complete(client, -1, EPIPE);
       if (in_halted) ++stats.halts_cleared;
       in_halted = false;
       fill_locked();

@@ -14,6 +14,7 @@
 namespace springscan {
 namespace {
 
+using analysis::ErrorCode;
 using analysis::PointCloud;
 using drivers::LaserLineScanner;
 using drivers::TactileProbeScanner;
@@ -152,10 +153,12 @@ TEST(EmulatedScanner, UnplugMidScanFailsWithoutPartialResultThenReconnects) {
   auto scanner = laser_driver();
   const auto failed = scanner->scan(nullptr);
   ASSERT_FALSE(failed.ok());
-  EXPECT_NE(failed.message().find("disconnected"), std::string::npos) << failed.message();
+  EXPECT_EQ(failed.code(), ErrorCode::kDeviceGone) << failed.error().to_string();
   EXPECT_NE(failed.message().find("no partial result"), std::string::npos) << failed.message();
   EXPECT_FALSE(scanner->online());
-  EXPECT_FALSE(scanner->identify().ok());  // nothing to talk to while unplugged
+  const auto absent = scanner->identify();  // nothing to talk to while unplugged
+  ASSERT_FALSE(absent.ok());
+  EXPECT_EQ(absent.code(), ErrorCode::kNotFound) << absent.error().to_string();
   emulator->set_faults({});
   emulator->plug();
   const auto cloud = scanner->scan(nullptr);
@@ -174,7 +177,7 @@ TEST(EmulatedScanner, StalledDeviceTimesOutAndTheNextScanWorks) {
   auto scanner = laser_driver();
   const auto failed = scanner->scan(nullptr);
   ASSERT_FALSE(failed.ok());
-  EXPECT_NE(failed.message().find("timeout"), std::string::npos) << failed.message();
+  EXPECT_EQ(failed.code(), ErrorCode::kTimeout) << failed.error().to_string();
   EXPECT_NE(failed.message().find("at frame 9 of 3"), std::string::npos) << failed.message();
   const auto cloud = scanner->scan(nullptr);
   ASSERT_TRUE(cloud.ok()) << cloud.message();
@@ -189,7 +192,7 @@ TEST(EmulatedScanner, CorruptFrameFailsTheScanAndTheNextScanWorks) {
   auto scanner = laser_driver();
   const auto failed = scanner->scan(nullptr);
   ASSERT_FALSE(failed.ok());
-  EXPECT_NE(failed.message().find("bad CRC"), std::string::npos) << failed.message();
+  EXPECT_EQ(failed.code(), ErrorCode::kBadCrc) << failed.error().to_string();
   const auto cloud = scanner->scan(nullptr);
   ASSERT_TRUE(cloud.ok()) << cloud.message();
   EXPECT_EQ(scanner->last_outcome().frames_received,
@@ -206,8 +209,57 @@ TEST(EmulatedScanner, SequenceGapFailsTheScan) {
   TactileProbeScanner scanner(s);
   const auto failed = scanner.scan(nullptr);
   ASSERT_FALSE(failed.ok());
-  EXPECT_NE(failed.message().find("sequence gap"), std::string::npos) << failed.message();
+  EXPECT_EQ(failed.code(), ErrorCode::kSequenceGap) << failed.error().to_string();
   EXPECT_TRUE(scanner.scan(nullptr).ok());
+}
+
+TEST(EmulatedScanner, MissingProfileIsASequenceGapAndTheNextScanWorks) {
+  auto settings = device_settings(drivers::protocol::ScannerKind::kLaserLine);
+  settings.faults.skip_frame_at_fraction = 0.5;  // frame sequence intact, profile index jumps
+  auto emulator = emulate(settings);
+  ASSERT_TRUE(emulator);
+  auto scanner = laser_driver();
+  const auto failed = scanner->scan(nullptr);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_EQ(failed.code(), ErrorCode::kSequenceGap) << failed.error().to_string();
+  EXPECT_NE(failed.message().find("out of order"), std::string::npos) << failed.message();
+  EXPECT_TRUE(scanner->scan(nullptr).ok());
+}
+
+TEST(EmulatedScanner, MissingProbeBatchIsASequenceGap) {
+  auto settings = device_settings(drivers::protocol::ScannerKind::kTactileProbe);
+  settings.faults.skip_frame_at_fraction = 0.5;
+  auto emulator = emulate(settings);
+  ASSERT_TRUE(emulator);
+  drivers::TactileScannerSettings s;
+  s.link = link_settings(drivers::protocol::ScannerKind::kTactileProbe);
+  TactileProbeScanner scanner(s);
+  const auto failed = scanner.scan(nullptr);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_EQ(failed.code(), ErrorCode::kSequenceGap) << failed.error().to_string();
+}
+
+TEST(EmulatedScanner, EndpointHaltThatCannotBeClearedIsAStalledEndpoint) {
+  auto settings = device_settings(drivers::protocol::ScannerKind::kLaserLine);
+  settings.faults.halt_at_fraction = 0.4;
+  settings.faults.halt_sticks = true;
+  auto emulator = emulate(settings);
+  ASSERT_TRUE(emulator);
+  auto scanner = laser_driver();
+  const auto failed = scanner->scan(nullptr);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_EQ(failed.code(), ErrorCode::kStalledEndpoint) << failed.error().to_string();
+  EXPECT_NE(failed.message().find("no partial result"), std::string::npos) << failed.message();
+  EXPECT_EQ(emulator->stats().halts_cleared, 0u);
+  // A power cycle (replug) recovers the device.
+  emulator->unplug();
+  EXPECT_FALSE(scanner->scan(nullptr).ok());  // the driver notices that the device is gone
+  emulator->set_faults({});
+  emulator->plug();
+  const auto cloud = scanner->scan(nullptr);
+  ASSERT_TRUE(cloud.ok()) << cloud.error().to_string();
+  EXPECT_EQ(scanner->last_outcome().frames_received,
+            scanner->last_outcome().started.expected_frames);
 }
 
 TEST(EmulatedScanner, StalledEndpointIsClearedAndTheScanCompletes) {
@@ -231,7 +283,7 @@ TEST(EmulatedScanner, CancelStopsTheDeviceAndTheNextScanWorks) {
   auto scanner = laser_driver();
   const auto cancelled = scanner->scan([](double f) { return f < 0.3; });
   ASSERT_FALSE(cancelled.ok());
-  EXPECT_NE(cancelled.message().find("cancelled"), std::string::npos) << cancelled.message();
+  EXPECT_EQ(cancelled.code(), ErrorCode::kCancelled) << cancelled.error().to_string();
   EXPECT_TRUE(scanner->scan(nullptr).ok());
 }
 
@@ -242,12 +294,14 @@ TEST(EmulatedScanner, WrongKindAndWrongSerialAreRefused) {
   t.link = link_settings(drivers::protocol::ScannerKind::kLaserLine);  // finds the laser
   const auto kind = TactileProbeScanner(t).identify();
   ASSERT_FALSE(kind.ok());
+  EXPECT_EQ(kind.code(), ErrorCode::kInvalidSettings) << kind.error().to_string();
   EXPECT_NE(kind.message().find("needs a tactile_probe"), std::string::npos) << kind.message();
   drivers::LaserScannerSettings l;
   l.link = link_settings(drivers::protocol::ScannerKind::kLaserLine);
   l.link.usb.serial = "SN-OTHER";
   const auto serial = LaserLineScanner(l).identify();
   ASSERT_FALSE(serial.ok());
+  EXPECT_EQ(serial.code(), ErrorCode::kNotFound) << serial.error().to_string();
   EXPECT_NE(serial.message().find("SN-TEST-7"), std::string::npos) << serial.message();
 }
 
