@@ -4,7 +4,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
 #include <ctime>
 #include <stdexcept>
@@ -28,24 +27,89 @@ std::string job_name(const RunnerJob& job) {
          std::to_string(regs::result_seq_from_record(job.record)) + ")";
 }
 
-std::string lower(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
+// What the operator should do, per ERROR_CODE (docs/modbus-register-map.md, "Error codes").
+std::string operator_hint(regs::ErrorCode code) {
+  switch (code) {
+    case regs::ErrorCode::kScanFailed:
+      return ". The station is in FAULT (ERROR_CODE 2). Check the scanner's cable and power and "
+             "that the part is in place, then set ERROR_RESET (coil 3) from the PLC.";
+    case regs::ErrorCode::kPartModelFailed:
+      return ". The station is in FAULT (ERROR_CODE 4). Check the part's cad_file and settings "
+             "in the config, then set ERROR_RESET (coil 3).";
+    case regs::ErrorCode::kInternal:
+      return ". The station is in FAULT (ERROR_CODE 9): this is a bug; keep this log, then set "
+             "ERROR_RESET (coil 3).";
+    default:
+      return ". The station is in FAULT (ERROR_CODE 3). Check that the right part (PART_ID) is "
+             "on the fixture and clean, then set ERROR_RESET (coil 3).";
+  }
 }
 
 }  // namespace
 
-regs::ErrorDetail classify_scan_error(const std::string& message) {
-  const std::string m = lower(message);
-  const auto has = [&m](const char* word) { return m.find(word) != std::string::npos; };
-  if (has("unplug") || has("no device") || has("disconnect") || has("gone") || has("not found")) {
-    return regs::ErrorDetail::kDeviceGone;
+PlcError plc_error_for_scan(analysis::ErrorCode code) {
+  using analysis::ErrorCode;
+  using D = regs::ErrorDetail;
+  constexpr auto kScan = regs::ErrorCode::kScanFailed;
+  switch (code) {
+    case ErrorCode::kDeviceGone:
+    case ErrorCode::kNotFound:  // not there when the scan began: as good as unplugged
+      return {kScan, D::kDeviceGone};
+    case ErrorCode::kTimeout:
+      return {kScan, D::kTimeout};
+    case ErrorCode::kBadCrc:
+      return {kScan, D::kCorruptData};
+    case ErrorCode::kCancelled:
+      return {kScan, D::kCancelled};
+    case ErrorCode::kStalledEndpoint:
+      return {kScan, D::kStalledEndpoint};
+    case ErrorCode::kSequenceGap:
+      return {kScan, D::kSequenceGap};
+    case ErrorCode::kProtocolError:
+      return {kScan, D::kProtocolError};
+    case ErrorCode::kDeviceFault:
+      return {kScan, D::kDeviceFault};
+    case ErrorCode::kInternal:
+      return {regs::ErrorCode::kInternal, D::kOther};
+    case ErrorCode::kOsError:
+    case ErrorCode::kInvalidInput:
+    case ErrorCode::kIoError:
+    case ErrorCode::kCorruption:
+    case ErrorCode::kInvalidSettings:  // e.g. the configured kind is not the device's
+    case ErrorCode::kAnalysisFailed:
+      return {kScan, D::kOther};
   }
-  if (has("timeout") || has("timed out")) return regs::ErrorDetail::kTimeout;
-  if (has("corrupt") || has("crc") || has("checksum")) return regs::ErrorDetail::kCorruptData;
-  if (has("cancel")) return regs::ErrorDetail::kCancelled;
-  return regs::ErrorDetail::kOther;
+  return {kScan, D::kOther};
+}
+
+PlcError plc_error_for_analysis(analysis::ErrorCode code) {
+  using analysis::ErrorCode;
+  using D = regs::ErrorDetail;
+  switch (code) {
+    // The scan is in memory: the files an analysis reads are the part's CAD model (and its
+    // cache), and its settings come from the part catalogue.
+    case ErrorCode::kNotFound:
+    case ErrorCode::kIoError:
+    case ErrorCode::kCorruption:
+    case ErrorCode::kInvalidSettings:
+      return {regs::ErrorCode::kPartModelFailed, D::kOther};
+    case ErrorCode::kCancelled:
+      return {regs::ErrorCode::kAnalysisFailed, D::kCancelled};
+    case ErrorCode::kInternal:
+      return {regs::ErrorCode::kInternal, D::kOther};
+    case ErrorCode::kInvalidInput:
+    case ErrorCode::kAnalysisFailed:
+    case ErrorCode::kDeviceGone:
+    case ErrorCode::kTimeout:
+    case ErrorCode::kStalledEndpoint:
+    case ErrorCode::kBadCrc:
+    case ErrorCode::kSequenceGap:
+    case ErrorCode::kProtocolError:
+    case ErrorCode::kDeviceFault:
+    case ErrorCode::kOsError:
+      return {regs::ErrorCode::kAnalysisFailed, D::kOther};
+  }
+  return {regs::ErrorCode::kAnalysisFailed, D::kOther};
 }
 
 JobRunner::JobRunner(drivers::Scanner& scanner, AnalyzeFn analyze, ReportStore& store, Log& log,
@@ -150,11 +214,11 @@ void JobRunner::run(const RunnerJob& job) {
   online_ = scanner_.online();
   v1::InspectionReport report;
   if (!scan) {
-    JobEnd end{regs::ResultCode::kScanFailed, false, false, regs::ErrorCode::kScanFailed,
-               classify_scan_error(scan.message())};
-    log_.error(name + ": SCAN FAILED: " + scan.message() +
-               ". The station is in FAULT (ERROR_CODE 2). Check the scanner's cable and power "
-               "and that the part is in place, then set ERROR_RESET (coil 3) from the PLC.");
+    const PlcError plc = plc_error_for_scan(scan.code());
+    JobEnd end{regs::ResultCode::kScanFailed, false, false, plc.code, plc.detail};
+    log_.error(name + ": SCAN FAILED (" + analysis::to_string(scan.code()) + ", ERROR_DETAIL " +
+               std::to_string(static_cast<int>(plc.detail)) + "): " + scan.message() +
+               operator_hint(plc.code));
     report.mutable_verdict()->add_reasons("scan failed: " + scan.message());
     post(finish(job, std::move(report), nullptr, end));
     return;
@@ -166,15 +230,10 @@ void JobRunner::run(const RunnerJob& job) {
   post(RunnerEvent{RunnerEvent::Kind::kAcquired, job.record, {}, {}, {}});
   auto outcome = analyze_(job.request.part_id, *scan);
   if (!outcome) {
-    const bool model = outcome.message().rfind(kPartModelErrorPrefix, 0) == 0;
-    JobEnd end{regs::ResultCode::kAnalysisFailed, false, false,
-               model ? regs::ErrorCode::kPartModelFailed : regs::ErrorCode::kAnalysisFailed,
-               regs::ErrorDetail::kOther};
-    log_.error(name + ": ANALYSIS FAILED: " + outcome.message() +
-               (model ? ". The station is in FAULT (ERROR_CODE 4). Check the part's cad_file in "
-                        "the config, then set ERROR_RESET (coil 3)."
-                      : ". The station is in FAULT (ERROR_CODE 3). Check that the right part "
-                        "(PART_ID) is on the fixture and clean, then set ERROR_RESET (coil 3)."));
+    const PlcError plc = plc_error_for_analysis(outcome.code());
+    JobEnd end{regs::ResultCode::kAnalysisFailed, false, false, plc.code, plc.detail};
+    log_.error(name + ": ANALYSIS FAILED (" + analysis::to_string(outcome.code()) +
+               "): " + outcome.message() + operator_hint(plc.code));
     report.mutable_verdict()->add_reasons("analysis failed: " + outcome.message());
     report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan->size()));
     post(finish(job, std::move(report), nullptr, end));

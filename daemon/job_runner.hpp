@@ -28,11 +28,15 @@
 
 namespace springscan::daemon {
 
-/// Starts the message of an AnalyzeFn error that is about the part's CAD model rather than the
-/// scan: the runner then reports ERROR_CODE 4 (part model) instead of 3 (analysis).
+/// Starts the message of an AnalyzeFn error that is about the part's CAD model, for the person
+/// reading the log and the report. Text only: the runner decides ERROR_CODE 4 (part model) vs 3
+/// (analysis) by the error's code (plc_error_for_analysis), never by this prefix.
 inline constexpr const char* kPartModelErrorPrefix = "part model: ";
 
 /// Analyses one scan of part `part_id`. Called on the runner's thread, one call at a time.
+/// Errors carry their code through (plc_error_for_analysis maps it for the PLC): kNotFound,
+/// kIoError, kCorruption or kInvalidSettings for the part's CAD model or settings, anything else
+/// for the analysis of the scan.
 using AnalyzeFn = std::function<analysis::Expected<analysis::InspectionOutcome>(
     std::uint16_t part_id, const analysis::PointCloud& scan)>;
 
@@ -99,7 +103,18 @@ class JobRunner {
   std::thread thread_;
 };
 
-/// ERROR_DETAIL for a scan error message (the Scanner interface reports errors as text).
-regs::ErrorDetail classify_scan_error(const std::string& message);
+/// What the PLC is told about a failure: ERROR_CODE and ERROR_DETAIL (input registers 4, 5).
+struct PlcError {
+  regs::ErrorCode code = regs::ErrorCode::kNone;
+  regs::ErrorDetail detail = regs::ErrorDetail::kNone;
+  bool operator==(const PlcError&) const = default;
+};
+
+/// ERROR_CODE / ERROR_DETAIL for a failed scan, from the code of Scanner::scan's error
+/// (docs/modbus-register-map.md, "Error codes"). A switch over every code: no message text.
+PlcError plc_error_for_scan(analysis::ErrorCode code);
+/// ERROR_CODE / ERROR_DETAIL for a failed analysis, from the code of the AnalyzeFn's error:
+/// files and settings of the part (the only files an analysis reads) give 4, the rest 3.
+PlcError plc_error_for_analysis(analysis::ErrorCode code);
 
 }  // namespace springscan::daemon

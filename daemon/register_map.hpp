@@ -23,7 +23,9 @@ namespace springscan::daemon::regs {
 // 2: ERROR_RESET keeps a valid result, RESULT_STALE (discrete input 10) instead of the TTL
 // dropping RESULT_VALID, PLC_COMM_LOST raises ERROR_CODE 7, PAGE_SELECT past the last page and
 // unit id 0 as below.
-inline constexpr std::uint16_t kMapVersion = 2;
+// 3: ERROR_DETAIL 5..8 (stalled endpoint, sequence gap, protocol error, device fault), which
+// version 2 reported as 9.
+inline constexpr std::uint16_t kMapVersion = 3;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
@@ -173,14 +175,19 @@ enum class ErrorCode : std::uint16_t {
   kInternal = 9,            ///< a bug: see the log
 };
 
-/// ERROR_DETAIL register: the cause within ERROR_CODE, where one is known.
+/// ERROR_DETAIL register: the cause within ERROR_CODE, where one is known. For ERROR_CODE 2
+/// each value is one driver error code (analysis::ErrorCode, daemon plc_error_for_scan).
 enum class ErrorDetail : std::uint16_t {
   kNone = 0,
-  kDeviceGone = 1,   ///< unplugged during the scan
-  kTimeout = 2,      ///< the device stopped answering
-  kCorruptData = 3,  ///< frames failed their checks
-  kCancelled = 4,    ///< the scan was cancelled (shutdown)
-  kOther = 9,
+  kDeviceGone = 1,       ///< unplugged during the scan, or not there (kDeviceGone, kNotFound)
+  kTimeout = 2,          ///< the device stopped answering (kTimeout)
+  kCorruptData = 3,      ///< frames failed their CRC (kBadCrc)
+  kCancelled = 4,        ///< the scan was cancelled, e.g. shutdown (kCancelled)
+  kStalledEndpoint = 5,  ///< a USB endpoint stalled and could not be cleared (kStalledEndpoint)
+  kSequenceGap = 6,      ///< frames or profiles lost or out of order (kSequenceGap)
+  kProtocolError = 7,    ///< the device broke the protocol (kProtocolError)
+  kDeviceFault = 8,      ///< the device reported an error, e.g. sensor fault (kDeviceFault)
+  kOther = 9,            ///< any other cause (kOsError, a config mismatch, ...)
 };
 
 /// REJECT_CODE register: why the last trigger edge was refused (no Modbus exception is sent).

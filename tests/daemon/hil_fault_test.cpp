@@ -1,6 +1,7 @@
 // Hardware in the loop, the faults (hil_rig.hpp): the scanner unplugged mid-scan and plugged
 // back, a trigger while busy, the PLC reconnecting mid-handshake, kill -9 of the daemon during
-// an analysis, SIGTERM while a scan waits on a silent device.
+// an analysis, SIGTERM while a scan waits on a silent device, and each device fault reaching the
+// PLC as its ERROR_DETAIL.
 #include <csignal>
 #include <set>
 
@@ -206,6 +207,58 @@ TEST_F(HilTest, SigtermWhileTheScanWaitsOnASilentDeviceStopsPromptly) {
   EXPECT_NE(cancelled.verdict().reasons(0).find("cancelled"), std::string::npos)
       << cancelled.verdict().reasons(0);
 }
+
+// A device fault, injected by the emulated scanner, and the ERROR_DETAIL the PLC must read.
+struct FaultCase {
+  const char* name;
+  simulators::DeviceFaults faults;
+  regs::ErrorDetail detail;
+};
+
+simulators::DeviceFaults stuck_halt() {
+  simulators::DeviceFaults f;
+  f.halt_at_fraction = 0.4;
+  f.halt_sticks = true;
+  return f;
+}
+simulators::DeviceFaults skipped_profile() {
+  simulators::DeviceFaults f;
+  f.skip_frame_at_fraction = 0.5;
+  return f;
+}
+simulators::DeviceFaults bad_crc() {
+  simulators::DeviceFaults f;
+  f.corrupt_crc_at_fraction = 0.5;
+  return f;
+}
+
+class HilFaultDetail : public HilTest, public ::testing::WithParamInterface<FaultCase> {};
+
+TEST_P(HilFaultDetail, DeviceFaultReachesThePlcAsItsErrorDetail) {
+  testing::HilDevice device;
+  device.faults = GetParam().faults;
+  emulate(testing::kGoodSpringback, device);
+  auto daemon = start_daemon();
+  auto client = plc(daemon->port());
+  wait_online(*client);
+  auto failed = client->run_cycle(1, 1, false);
+  ASSERT_TRUE(failed.ok()) << failed.message();
+  EXPECT_EQ(failed->result.code, regs::ResultCode::kScanFailed);
+  EXPECT_EQ(failed->error_code, static_cast<std::uint16_t>(regs::ErrorCode::kScanFailed));
+  auto status = client->read_status();
+  ASSERT_TRUE(status.ok());
+  EXPECT_EQ(status->live[regs::kIrErrorDetail], static_cast<std::uint16_t>(GetParam().detail))
+      << report(1).verdict().DebugString();
+  EXPECT_EQ(daemon->stop(SIGTERM), 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Faults, HilFaultDetail,
+    ::testing::Values(FaultCase{"StuckHalt", stuck_halt(), regs::ErrorDetail::kStalledEndpoint},
+                      FaultCase{"SkippedProfile", skipped_profile(),
+                                regs::ErrorDetail::kSequenceGap},
+                      FaultCase{"BadCrc", bad_crc(), regs::ErrorDetail::kCorruptData}),
+    [](const ::testing::TestParamInfo<FaultCase>& p) { return std::string(p.param.name); });
 
 }  // namespace
 }  // namespace springscan::daemon

@@ -21,8 +21,10 @@ class RunnerTest : public ::testing::Test {
         log_(LogLevel::kError, nullptr, false),
         runner_(
             scanner_,
-            [this](std::uint16_t part, const analysis::PointCloud& scan) {
+            [this](std::uint16_t part, const analysis::PointCloud& scan)
+                -> analysis::Expected<analysis::InspectionOutcome> {
               last_part_ = part;
+              if (fail_analysis_) return *fail_analysis_;
               return testing::plane_analysis(scan, 0.1);
             },
             store_, log_, RunnerSettings{"test-station", 0.05}) {}
@@ -47,6 +49,7 @@ class RunnerTest : public ::testing::Test {
   Log log_;
   PlaneScanner scanner_;
   std::uint16_t last_part_ = 0;
+  std::optional<analysis::Error> fail_analysis_;  // set before run_job
   bool acquired_ = false;
   JobRunner runner_;
 };
@@ -116,13 +119,72 @@ TEST_F(RunnerTest, UnwritableReportDirectoryMeansNoValidResult) {
   EXPECT_EQ(e.end.error_code, regs::ErrorCode::kReportWriteFailed);
 }
 
-TEST(ScanErrorClassification, MapsMessagesToDetails) {
-  EXPECT_EQ(classify_scan_error("LIBUSB_ERROR_NO_DEVICE: device gone"),
-            regs::ErrorDetail::kDeviceGone);
-  EXPECT_EQ(classify_scan_error("bulk transfer timed out"), regs::ErrorDetail::kTimeout);
-  EXPECT_EQ(classify_scan_error("frame CRC mismatch"), regs::ErrorDetail::kCorruptData);
-  EXPECT_EQ(classify_scan_error("scan cancelled"), regs::ErrorDetail::kCancelled);
-  EXPECT_EQ(classify_scan_error("something else"), regs::ErrorDetail::kOther);
+TEST_F(RunnerTest, ScanFailureCodeReachesThePlcAsErrorDetail) {
+  // The message says nothing the old text search knew: only the code decides.
+  scanner_.fail_next_scan =
+      analysis::fail(analysis::ErrorCode::kStalledEndpoint, "scanner SN-1: clear halt on 0x81");
+  const RunnerEvent e = run_job(1, 3);
+  EXPECT_TRUE(e.end.persisted);
+  EXPECT_EQ(e.end.result_code, regs::ResultCode::kScanFailed);
+  EXPECT_EQ(e.end.error_code, regs::ErrorCode::kScanFailed);
+  EXPECT_EQ(e.end.error_detail, regs::ErrorDetail::kStalledEndpoint);
+}
+
+TEST_F(RunnerTest, PartModelFailureIsErrorCode4ByItsCode) {
+  fail_analysis_ = analysis::fail(analysis::ErrorCode::kNotFound, "hat.step: no such file");
+  const RunnerEvent e = run_job(1, 3);
+  EXPECT_TRUE(e.end.persisted);
+  EXPECT_EQ(e.end.result_code, regs::ResultCode::kAnalysisFailed);
+  EXPECT_EQ(e.end.error_code, regs::ErrorCode::kPartModelFailed);
+  fail_analysis_ = analysis::fail(analysis::ErrorCode::kAnalysisFailed, "3 points, at least 10");
+  EXPECT_EQ(run_job(2, 3).end.error_code, regs::ErrorCode::kAnalysisFailed);
+}
+
+// The PLC's ERROR_CODE / ERROR_DETAIL for every error code, as docs/modbus-register-map.md
+// ("Error codes") lists them.
+struct CodeRow {
+  analysis::ErrorCode code;
+  PlcError scan;      // when Scanner::scan fails with `code`
+  PlcError analysis;  // when the AnalyzeFn fails with `code`
+};
+
+TEST(PlcErrorMapping, EveryCodeHasItsRegisterValues) {
+  using analysis::ErrorCode;
+  using D = regs::ErrorDetail;
+  using E = regs::ErrorCode;
+  const CodeRow rows[] = {
+      {ErrorCode::kInvalidInput, {E::kScanFailed, D::kOther}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kNotFound, {E::kScanFailed, D::kDeviceGone}, {E::kPartModelFailed, D::kOther}},
+      {ErrorCode::kIoError, {E::kScanFailed, D::kOther}, {E::kPartModelFailed, D::kOther}},
+      {ErrorCode::kCorruption, {E::kScanFailed, D::kOther}, {E::kPartModelFailed, D::kOther}},
+      {ErrorCode::kInvalidSettings, {E::kScanFailed, D::kOther}, {E::kPartModelFailed, D::kOther}},
+      {ErrorCode::kAnalysisFailed, {E::kScanFailed, D::kOther}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kCancelled, {E::kScanFailed, D::kCancelled}, {E::kAnalysisFailed, D::kCancelled}},
+      {ErrorCode::kDeviceGone, {E::kScanFailed, D::kDeviceGone}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kTimeout, {E::kScanFailed, D::kTimeout}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kStalledEndpoint,
+       {E::kScanFailed, D::kStalledEndpoint},
+       {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kBadCrc, {E::kScanFailed, D::kCorruptData}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kSequenceGap, {E::kScanFailed, D::kSequenceGap}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kProtocolError,
+       {E::kScanFailed, D::kProtocolError},
+       {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kDeviceFault, {E::kScanFailed, D::kDeviceFault}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kOsError, {E::kScanFailed, D::kOther}, {E::kAnalysisFailed, D::kOther}},
+      {ErrorCode::kInternal, {E::kInternal, D::kOther}, {E::kInternal, D::kOther}},
+  };
+  for (const CodeRow& row : rows) {
+    const std::string name = analysis::to_string(row.code);
+    EXPECT_EQ(plc_error_for_scan(row.code), row.scan) << name;
+    EXPECT_EQ(plc_error_for_analysis(row.code), row.analysis) << name;
+    EXPECT_NE(name, "unknown error");
+  }
+  // The detail values are the register map's numbers (the PLC programs against them).
+  EXPECT_EQ(static_cast<int>(D::kStalledEndpoint), 5);
+  EXPECT_EQ(static_cast<int>(D::kSequenceGap), 6);
+  EXPECT_EQ(static_cast<int>(D::kProtocolError), 7);
+  EXPECT_EQ(static_cast<int>(D::kDeviceFault), 8);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <filesystem>
 #include <mutex>
+#include <optional>
 #include <random>
 #include <string>
 
@@ -22,7 +23,7 @@ namespace springscan::daemon::testing {
 class PlaneScanner : public drivers::Scanner {
  public:
   analysis::Expected<drivers::DeviceInfo> identify() override {
-    if (!present) return analysis::fail("device not found");
+    if (!present) return analysis::fail(analysis::ErrorCode::kNotFound, "device not found");
     return drivers::DeviceInfo{"test plane", "SN-1", "1.0", "laser_line"};
   }
   analysis::Expected<analysis::PointCloud> scan(const drivers::ScanProgress& progress) override {
@@ -34,7 +35,13 @@ class PlaneScanner : public drivers::Scanner {
     }
     if (unplug_next_scan.exchange(false)) {
       present = false;
-      return analysis::fail("scanner unplugged during the scan (LIBUSB_ERROR_NO_DEVICE)");
+      return analysis::fail(analysis::ErrorCode::kDeviceGone,
+                            "scanner unplugged during the scan (LIBUSB_ERROR_NO_DEVICE)");
+    }
+    if (fail_next_scan) {
+      const analysis::Error error = *fail_next_scan;
+      fail_next_scan.reset();
+      return error;
     }
     analysis::PointCloud cloud;
     std::mt19937 rng(7);
@@ -42,7 +49,7 @@ class PlaneScanner : public drivers::Scanner {
     for (int i = 0; i < points; ++i) {
       cloud.points.emplace_back(xy(rng), xy(rng), offset_mm.load());
       if (i % 100 == 0 && progress && !progress(double(i) / points)) {
-        return analysis::fail("scan cancelled");
+        return analysis::fail(analysis::ErrorCode::kCancelled, "scan cancelled");
       }
     }
     return cloud;
@@ -63,6 +70,9 @@ class PlaneScanner : public drivers::Scanner {
 
   std::atomic<bool> present{true};
   std::atomic<bool> unplug_next_scan{false};
+  /// The next scan fails with this error (set before the job starts; the runner's start()
+  /// orders the write before the scan).
+  std::optional<analysis::Error> fail_next_scan;
   std::atomic<double> offset_mm{0.05};
   std::atomic<int> scans{0};
   int points = 2000;
