@@ -91,7 +91,7 @@ std::string sha256_hex(std::string_view data) {
 
 Expected<std::string> sha256_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) return fail(path + ": cannot open the file for hashing");
+  if (!in) return fail(ErrorCode::kIoError, path + ": cannot open the file for hashing");
   Sha256 hash;
   std::vector<char> buffer(1 << 16);
   while (in) {
@@ -99,7 +99,7 @@ Expected<std::string> sha256_file(const std::string& path) {
     hash.update(reinterpret_cast<const unsigned char*>(buffer.data()),
                 static_cast<std::size_t>(in.gcount()));
   }
-  if (in.bad()) return fail(path + ": read error while hashing");
+  if (in.bad()) return fail(ErrorCode::kIoError, path + ": read error while hashing");
   return hash.hex();
 }
 

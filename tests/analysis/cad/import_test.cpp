@@ -22,21 +22,25 @@ TEST(CadImport, ErrorsNameTheFileAndWhatFailed) {
   const auto missing = load_cad(dir.file("missing.step"));
   ASSERT_FALSE(missing);
   EXPECT_NE(missing.message().find("missing.step: no such file"), std::string::npos);
+  EXPECT_TRUE(missing.error().is_not_found()) << missing.error().to_string();
 
   write_text(dir.file("empty.igs"), "");
   const auto empty = load_cad(dir.file("empty.igs"));
   ASSERT_FALSE(empty);
   EXPECT_NE(empty.message().find("empty.igs: the file is empty"), std::string::npos);
+  EXPECT_TRUE(empty.error().is_corruption()) << empty.error().to_string();
 
   write_text(dir.file("part.stl"), "solid x\nendsolid x\n");
   const auto stl = load_cad(dir.file("part.stl"));
   ASSERT_FALSE(stl);
   EXPECT_NE(stl.message().find("part.stl: unsupported file type"), std::string::npos);
+  EXPECT_TRUE(stl.error().is_invalid_input()) << stl.error().to_string();
 
   write_text(dir.file("junk.step"), "this is not a STEP file\n");
   const auto junk = load_cad(dir.file("junk.step"));
   ASSERT_FALSE(junk);
   EXPECT_NE(junk.message().find("junk.step"), std::string::npos) << junk.message();
+  EXPECT_TRUE(junk.error().is_corruption()) << junk.error().to_string();
 
   write_text(dir.file("junk.brep"), "garbage\n");
   const auto brep = load_cad(dir.file("junk.brep"));

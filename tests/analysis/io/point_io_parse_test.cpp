@@ -160,6 +160,7 @@ TEST(XyzParse, SeparatorsCommentsHeadersAndCountLines) {
   auto mixed = parse_xyz("1 2 3\n4 5 6 7\n", "mixed.xyz");
   ASSERT_FALSE(mixed);
   EXPECT_NE(mixed.message().find("mixed.xyz: line 2"), std::string::npos) << mixed.message();
+  EXPECT_TRUE(mixed.error().is_corruption()) << mixed.error().to_string();
   auto word = parse_xyz("1 2 3\n4 five 6\n", "word.xyz");
   ASSERT_FALSE(word);
   EXPECT_NE(word.message().find("line 2: column 2"), std::string::npos) << word.message();
@@ -175,6 +176,7 @@ TEST(StlParse, AsciiErrorsNameTheLine) {
   auto s = parse_stl(text, "bad.stl");
   ASSERT_FALSE(s);
   EXPECT_NE(s.message().find("bad.stl: line 7"), std::string::npos) << s.message();
+  EXPECT_TRUE(s.error().is_corruption()) << s.error().to_string();
 }
 
 }  // namespace

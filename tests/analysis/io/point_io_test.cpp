@@ -232,6 +232,7 @@ TEST(PointFiles, WriteThenReadEveryExtension) {
   auto missing = read_point_cloud((dir / "missing.ply").string());
   ASSERT_FALSE(missing);
   EXPECT_NE(missing.message().find("missing.ply"), std::string::npos);
+  EXPECT_TRUE(missing.error().is_not_found()) << missing.error().to_string();
   std::filesystem::remove_all(dir);
 }
 
