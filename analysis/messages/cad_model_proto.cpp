@@ -174,7 +174,7 @@ Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModel
                   "segmentation.max_sheet_thickness_mm", sg.max_sheet_thickness_mm),
   };
   for (const std::string& e : bad)
-    if (!e.empty()) return fail(e);
+    if (!e.empty()) return fail(ErrorCode::kInvalidSettings, e);
   if (message.has_sew_loose_faces()) im.sew_loose_faces = message.sew_loose_faces();
   if (message.has_heal()) im.heal = message.heal();
   if (message.has_sample_seed()) settings.sampling.seed = message.sample_seed();
