@@ -214,6 +214,8 @@ struct FaultCase {
   simulators::DeviceFaults faults;
   regs::ErrorDetail detail;
 };
+// Names the case in test output (gtest would print the struct's bytes).
+void PrintTo(const FaultCase& c, std::ostream* os) { *os << c.name; }
 
 simulators::DeviceFaults stuck_halt() {
   simulators::DeviceFaults f;
