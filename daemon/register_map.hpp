@@ -22,10 +22,9 @@ namespace springscan::daemon::regs {
 
 // 2: ERROR_RESET keeps a valid result, RESULT_STALE (discrete input 10) instead of the TTL
 // dropping RESULT_VALID, PLC_COMM_LOST raises ERROR_CODE 7, PAGE_SELECT past the last page and
-// unit id 0 as below.
-// 3: ERROR_DETAIL 5..8 (stalled endpoint, sequence gap, protocol error, device fault), which
-// version 2 reported as 9.
-inline constexpr std::uint16_t kMapVersion = 3;
+// unit id 0 as below, ERROR_DETAIL 5..8 (stalled endpoint, sequence gap, protocol error, device
+// fault), which version 1 reported as 9.
+inline constexpr std::uint16_t kMapVersion = 2;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
