@@ -240,8 +240,10 @@ void JobRunner::run(const RunnerJob& job) {
     return;
   }
   const bool pass = outcome->report.verdict().pass();
-  JobEnd end{pass ? regs::ResultCode::kOk : regs::ResultCode::kFormNok, pass, false,
-             regs::ErrorCode::kNone, regs::ErrorDetail::kNone};
+  const auto code = pass                                       ? regs::ResultCode::kOk
+                    : outcome->report.global_fit().ambiguous() ? regs::ResultCode::kAmbiguous
+                                                               : regs::ResultCode::kFormNok;
+  JobEnd end{code, pass, false, regs::ErrorCode::kNone, regs::ErrorDetail::kNone};
   std::string verdict = pass ? "PASS" : "FAIL";
   for (const auto& reason : outcome->report.verdict().reasons()) verdict += "; " + reason;
   log_.info(name + ": " + verdict);

@@ -160,6 +160,7 @@ enum class ResultCode : std::uint16_t {
   kNoData = 2,          ///< no result since start (the block is zero)
   kScanFailed = 3,      ///< the scan did not complete (unplug, timeout, corrupt data)
   kAnalysisFailed = 4,  ///< the scan could not be analysed (too few points, no fit)
+  kAmbiguous = 5,       ///< analysed, but two orientations fit within noise: NOK
 };
 
 /// ERROR_CODE register: why ERROR is set. Latched until ERROR_RESET.

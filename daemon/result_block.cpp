@@ -29,14 +29,15 @@ ResultBlock result_block_from_report(const v1::InspectionReport& report) {
   block.job_id = static_cast<std::uint16_t>(report.job_id());
   block.part_id = part_id_number(report.input().part_id());
   const auto code = report.result_code();
-  block.code = code <= static_cast<std::uint32_t>(regs::ResultCode::kAnalysisFailed)
+  block.code = code <= static_cast<std::uint32_t>(regs::ResultCode::kAmbiguous)
                    ? static_cast<regs::ResultCode>(code)
                    : regs::ResultCode::kAnalysisFailed;
   block.cycle_time_ms = static_cast<std::int64_t>(
       std::llround(std::isfinite(report.cycle_time_ms()) ? report.cycle_time_ms() : 0.0));
   block.scan_points = report.input().scan_points();
-  const bool analysed =
-      block.code == regs::ResultCode::kOk || block.code == regs::ResultCode::kFormNok;
+  const bool analysed = block.code == regs::ResultCode::kOk ||
+                        block.code == regs::ResultCode::kFormNok ||
+                        block.code == regs::ResultCode::kAmbiguous;
   if (!analysed) {
     // No analysis: the deviation fields say "no value" rather than a plausible zero.
     const double nan = std::numeric_limits<double>::quiet_NaN();

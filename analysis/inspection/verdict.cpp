@@ -63,6 +63,14 @@ void check_health(const v1::InspectionReport& r, const VerdictSettings& s, v1::V
     out.add_reasons("global fit residual rms " + fixed2(rms) + " mm > limit " +
                     fixed2(s.max_fit_rms_mm) + " mm: the analysis cannot be trusted");
   }
+  // Two orientations fit within noise: bends may be numbered in reverse, every result may
+  // belong to the other orientation.
+  if (r.global_fit().ambiguous()) {
+    out.add_reasons(
+        "ambiguous orientation: two distinct orientations fit within noise (error "
+        "ratio " +
+        fixed2(r.global_fit().orientation_ambiguity()) + "): the analysis cannot be trusted");
+  }
 }
 
 }  // namespace

@@ -11,7 +11,8 @@
 //   health    the deformation field covers >= min_coverage of the reduced model (when a field
 //             was computed), and the global fit's residual rms to the surface (rms_residual:
 //             the trimmed deviation rms; not rms_final, which grows with the sample spacing) <=
-//             max_fit_rms_mm: otherwise the numbers above cannot be trusted.
+//             max_fit_rms_mm, and the orientation is not ambiguous (global_fit.ambiguous):
+//             otherwise the numbers above cannot be trusted.
 //
 // Thread safety: pure function.
 

@@ -22,6 +22,8 @@ void to_proto(const GlobalFitResult& fit, const GlobalFitSettings& settings, v1:
   out->set_method(settings.icp.method == IcpMethod::kPointToPoint ? "point_to_point"
                                                                   : "point_to_plane");
   out->set_stop_reason(fit.icp.stop_reason);
+  out->set_ambiguous(fit.ambiguous);
+  out->set_orientation_ambiguity(fit.orientation.ambiguity);
 }
 
 void to_proto(const DeviationResult& deviation, const DeviationSettings& settings,

@@ -54,6 +54,14 @@ std::optional<Error> check_settings(const GlobalFitSettings& s) {
   return std::nullopt;
 }
 
+// The orientation comparison takes its ambiguity threshold and distinctness from the fit's.
+OrientationSettings orientation_settings(const GlobalFitSettings& s) {
+  OrientationSettings out = s.orientation;
+  out.ambiguous_error_ratio = s.symmetry_warning_ratio;
+  out.distinct_pose_deg = s.pca.distinct_pose_deg;
+  return out;
+}
+
 // The rms before and after the PCA alignment are figures for the report, taken where the scan
 // may still be far from the model: a nearest search from 300 mm away visits most of the tree,
 // so a sample of the scan stands in for all of it.
@@ -103,14 +111,20 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
                            : pca_align(scan, model_tree, model_normals, pca_settings);
     if (!pca) return fail("global fit: " + pca.message());
     result.pca = std::move(*pca);
-    start = result.pca.T_target_source;
     result.rms_after_pca_mm =
         rms_nearest_distance(diagnostic, result.pca.T_pca, model_tree, trim, threads);
-    if (result.pca.ambiguity > settings.symmetry_warning_ratio) {
+    // Every distinct finalist refined and scored on the same points against the full model.
+    auto choice = choose_orientation(scan, model_tree, model_normals, result.pca.finalist_poses,
+                                     orientation_settings(settings), settings.icp, threads);
+    if (!choice) return fail("global fit: " + choice.message());
+    result.orientation = std::move(*choice);
+    start = result.orientation.candidates[result.orientation.best].T_cad_scan;
+    result.ambiguous = result.orientation.ambiguous;
+    if (result.ambiguous) {
       std::ostringstream text;
-      text << "global fit: the part looks nearly symmetric (best/next distinct PCA candidate "
-              "error ratio "
-           << result.pca.ambiguity << "); the orientation may be ambiguous";
+      text << "global fit: the orientation is ambiguous: two distinct orientations fit within "
+              "noise of each other (robust error ratio "
+           << result.orientation.ambiguity << ")";
       result.warnings.push_back(text.str());
     }
   } else {

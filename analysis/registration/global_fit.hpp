@@ -1,6 +1,7 @@
 #pragma once
 // Global registration (paper §3, DESIGN.md stage 4): PCA alignment with the axis ambiguity
-// resolved (analysis/registration/pca.hpp), then ICP to convergence
+// resolved (analysis/registration/pca.hpp), its distinct finalists compared on the full model by
+// one converged robust error (analysis/registration/orientation.hpp), then ICP to convergence
 // (analysis/registration/icp.hpp).
 
 #include <string>
@@ -9,6 +10,7 @@
 #include "analysis/core/expected.hpp"
 #include "analysis/core/kdtree.hpp"
 #include "analysis/registration/icp.hpp"
+#include "analysis/registration/orientation.hpp"
 #include "analysis/registration/pca.hpp"
 
 namespace springscan::analysis {
@@ -18,9 +20,11 @@ struct GlobalFitSettings {
   PcaAlignSettings pca;                 ///< candidate search
   double pca_model_divisions = 100.0;   ///< candidates are scored on the model voxel-reduced to
                                         ///< its box diagonal / this (0: the full model)
-  double symmetry_warning_ratio = 0.9;  ///< warn of a nearly symmetric part when the best PCA
-                                        ///< candidate's score / the next distinct one's exceeds
-                                        ///< this (PcaAlignResult::ambiguity), (0, 1]
+  double symmetry_warning_ratio = 0.9;  ///< the orientation is ambiguous (warned, reported)
+                                        ///< when the best orientation's robust error / the next
+                                        ///< distinct one's exceeds this
+                                        ///< (OrientationChoice::ambiguity), (0, 1]
+  OrientationSettings orientation;      ///< the finalists compared on the full model
   IcpSettings icp;                      ///< the final ICP
 };
 
@@ -33,6 +37,9 @@ struct GlobalFitResult {
   double rms_final_mm = 0.0;          ///< the same after ICP
   IcpResult icp;                      ///< history, iterations, inliers, converged, stop reason
   PcaAlignResult pca;                 ///< candidate scores (empty when PCA was off)
+  OrientationChoice orientation;      ///< the PCA finalists compared on the full model
+  bool ambiguous = false;             ///< two distinct orientations fit within noise of each
+                                      ///< other (and the model is not symmetric between them)
   std::vector<std::string> warnings;  ///< e.g. a near-symmetric part, a degenerate surface
 };
 

@@ -39,6 +39,10 @@ double trimmed_score(const std::vector<Vec3>& sample, const Transform& T, const 
   return sum / static_cast<double>(std::min(keep, d2.size()));
 }
 
+double rotation_apart_rad(const Transform& a, const Transform& b) {
+  return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle();
+}
+
 // Refines candidates with a short ICP on a sample and scores them, in parallel.
 struct Refiner {
   const KdTree& target;
@@ -59,22 +63,40 @@ struct Refiner {
   }
 };
 
-// The lowest score wins (lowest index on ties). Ambiguity compares only with candidates that
-// ended in a different pose (more than distinct_pose_deg away): starts converging to the same
-// pose agree.
-void pick_best(const std::vector<Transform>& poses, double distinct_pose_deg,
-               PcaAlignResult& result) {
+// The lowest score of the last round wins (lowest index on ties): only the finalists have one
+// (every score of a round comes from the same sample and the same iterations). Ambiguity
+// compares only with finalists that ended in a different pose (more than distinct_pose_deg
+// away): starts converging to the same pose agree.
+void pick_best(const std::vector<Transform>& poses, const std::vector<std::size_t>& finalists,
+               double distinct_pose_deg, PcaAlignResult& result) {
   const auto& scores = result.candidate_scores;
-  result.best_candidate = 0;
-  for (std::size_t i = 1; i < scores.size(); ++i)
-    if (scores[i] < scores[result.best_candidate]) result.best_candidate = i;
-  const Mat3 best_rotation = poses[result.best_candidate].linear();
+  result.best_candidate = finalists.front();
+  for (std::size_t i : finalists)
+    if (scores[i] < scores[result.best_candidate] ||
+        (scores[i] == scores[result.best_candidate] && i < result.best_candidate))
+      result.best_candidate = i;
   double second = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < scores.size(); ++i) {
-    const double apart = Eigen::AngleAxisd(poses[i].linear() * best_rotation.transpose()).angle();
-    if (apart > distinct_pose_deg * kRadPerDeg) second = std::min(second, scores[i]);
-  }
+  for (std::size_t i : finalists)
+    if (rotation_apart_rad(poses[i], poses[result.best_candidate]) > distinct_pose_deg * kRadPerDeg)
+      second = std::min(second, scores[i]);
   result.ambiguity = second > 0.0 ? scores[result.best_candidate] / second : 1.0;
+}
+
+// The best `keep` of `order` (sorted by score) that ended in distinct poses: farther apart than
+// distinct_pose_deg in rotation or distinct_pose_mm in translation from every one kept before.
+std::vector<std::size_t> distinct_best(const std::vector<std::size_t>& order,
+                                       const std::vector<Transform>& poses, std::size_t keep,
+                                       const PcaAlignSettings& settings) {
+  std::vector<std::size_t> out;
+  for (std::size_t i : order) {
+    if (out.size() >= keep) break;
+    const bool same = std::any_of(out.begin(), out.end(), [&](std::size_t j) {
+      return rotation_apart_rad(poses[i], poses[j]) <= settings.distinct_pose_deg * kRadPerDeg &&
+             (poses[i].translation() - poses[j].translation()).norm() <= settings.distinct_pose_mm;
+    });
+    if (!same) out.push_back(i);
+  }
+  return out;
 }
 
 // The 1st and 99th percentile of the points' coordinates along each of the frame's axes
@@ -210,16 +232,20 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   // they stopped, twice, on a larger sample (a partial scan, whose centroid is off the model's,
   // needs more than a few iterations to settle). Scores are compared within a round only.
   refiner.run(screen_sample, order, settings.screen_iterations, refined, result.candidate_scores);
-  for (const auto& [keep, iterations] :
-       {std::pair{settings.survivors, settings.refine_iterations},
-        std::pair{settings.finalists, settings.finalist_iterations}}) {
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return result.candidate_scores[a] < result.candidate_scores[b];
-    });
-    order.resize(std::min(order.size(), keep));
-    refiner.run(sample, order, iterations, refined, result.candidate_scores);
-  }
-  pick_best(refined, settings.distinct_pose_deg, result);
+  const auto by_score = [&](std::size_t a, std::size_t b) {
+    return result.candidate_scores[a] < result.candidate_scores[b];
+  };
+  std::stable_sort(order.begin(), order.end(), by_score);
+  order.resize(std::min(order.size(), settings.survivors));
+  refiner.run(sample, order, settings.refine_iterations, refined, result.candidate_scores);
+  std::stable_sort(order.begin(), order.end(), by_score);
+  // The finalists are distinct poses: several starts that settled into the same pose must not
+  // crowd out the other orientation of a near-symmetric part.
+  order = distinct_best(order, refined, settings.finalists, settings);
+  refiner.run(sample, order, settings.finalist_iterations, refined, result.candidate_scores);
+  std::stable_sort(order.begin(), order.end(), by_score);
+  pick_best(refined, order, settings.distinct_pose_deg, result);
+  for (std::size_t i : order) result.finalist_poses.push_back(refined[i]);
   result.T_target_source = refined[result.best_candidate];
   result.T_pca = starts[result.best_candidate];
   return result;

@@ -6,8 +6,10 @@
 // signed permutations with det = +1), plus finer turns about the sheet normal, is tried. A
 // partial scan's centroid is not the model's either: where the rotated scan is clearly shorter
 // than the model along a model axis, it is also tried pushed against either end of the model's
-// box. Every start is refined by a short trimmed ICP on a sample, the best go on for longer, and
-// the best by a robust (trimmed) error is kept. Deterministic: ties go to the lower index.
+// box. Every start is refined by a short trimmed ICP on a sample, the best go on for longer, the
+// best distinct poses among them are refined further and the best of those by a robust (trimmed)
+// error is kept; the global fit then compares the finalists on the full model
+// (analysis/registration/orientation.hpp). Deterministic: ties go to the lower index.
 
 #include <cstddef>
 #include <vector>
@@ -48,6 +50,7 @@ struct PcaAlignSettings {
   double distinct_pose_deg = 5.0;          ///< candidates that ended farther apart than this are
                                            ///< different poses (for the ambiguity); nearer ones
                                            ///< converged to the same pose
+  double distinct_pose_mm = 10.0;          ///< ... or whose translations differ by more than this
   int threads = 0;                         ///< candidates refined in parallel, 0 = all cores
 };
 
@@ -56,8 +59,10 @@ struct PcaAlignResult {
   Transform T_pca = Transform::Identity();            ///< that candidate's pure PCA alignment
   std::size_t best_candidate = 0;                     ///< index into candidate_scores
   std::vector<double> candidate_scores;  ///< trimmed mean squared distance, mm^2, of every
-                                         ///< start (rotation x translation) after its ICP
+                                         ///< start (rotation x translation) after the last
+                                         ///< round it took part in (comparable within a round)
   double ambiguity = 0.0;  ///< best score / second-best score: near 1 = the part looks symmetric
+  std::vector<Transform> finalist_poses;  ///< the distinct finalists after their ICP, best first
 };
 
 /// The 24 proper rotations (det = +1) that map the source frame's axes onto the target frame's

@@ -1,0 +1,152 @@
+#include "analysis/registration/orientation.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include "analysis/core/parallel.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+constexpr double kRadPerDeg = 3.14159265358979323846 / 180.0;
+// Model samples whose spacing is measured (evenly strided).
+constexpr std::size_t kSpacingSamples = 256;
+// A point's error is the least over this many nearest model samples.
+constexpr std::size_t kScoreNeighbors = 4;
+// Model samples moved onto the model to test two orientations for equivalence.
+constexpr std::size_t kEquivalenceSamples = 2000;
+
+double rotation_apart_deg(const Transform& a, const Transform& b) {
+  return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle() / kRadPerDeg;
+}
+
+}  // namespace
+
+double model_sample_spacing(const KdTree& model_tree) {
+  if (model_tree.size() < 2) return 0.0;
+  const std::vector<Vec3> probe = strided_sample(model_tree.points(), kSpacingSamples);
+  std::vector<double> d(probe.size());
+  std::vector<Neighbor> out;
+  for (std::size_t i = 0; i < probe.size(); ++i) {
+    model_tree.knn(probe[i], 2, out);
+    d[i] = out.size() > 1 ? std::sqrt(out[1].squared_distance) : 0.0;
+  }
+  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+  std::nth_element(d.begin(), mid, d.end());
+  return *mid;
+}
+
+namespace {
+
+// The model sample that explains q best among its nearest ones: least tangent-plane distance
+// plus distance beyond `spacing_mm`. Near an edge the nearest sample may lie on the neighbouring
+// face (or on the sheet's other side), whose plane is not the point's. Returns that error, mm^2,
+// capped at cap2 (then `best` is the nearest sample).
+double best_sample(const KdTree& tree, const std::vector<Vec3>& normals, double spacing_mm,
+                   double cap2, const Vec3& q, std::uint32_t& best) {
+  std::array<std::uint32_t, kScoreNeighbors> index{};
+  std::array<double, kScoreNeighbors> d2{};
+  const std::size_t found = tree.knn(q, kScoreNeighbors, index.data(), d2.data());
+  const bool planes = normals.size() == tree.size();
+  double e2 = cap2;
+  best = index[0];
+  for (std::size_t k = 0; k < found; ++k) {
+    const Vec3 d = q - tree.points()[index[k]];
+    const double beyond = std::max(0.0, std::sqrt(d2[k]) - spacing_mm);
+    const double across = planes ? normals[index[k]].dot(d) : std::sqrt(d2[k]);
+    const double e = across * across + beyond * beyond;
+    if (e < e2) e2 = e, best = index[k];
+  }
+  return e2;
+}
+
+// ICP pairs by the same rule as the score.
+IcpPairSearch best_sample_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
+                                double spacing_mm) {
+  const bool planes = normals.size() == tree.size();
+  return [&tree, &normals, spacing_mm, planes](const std::vector<Vec3>& source, const Transform& T,
+                                               std::size_t begin, std::size_t end,
+                                               std::vector<IcpPair>& pairs) {
+    const double inf = std::numeric_limits<double>::infinity();
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3 q = T * source[i];
+      std::uint32_t best = 0;
+      best_sample(tree, normals, spacing_mm, inf, q, best);
+      IcpPair& p = pairs[i];
+      p.valid = true;
+      p.point = tree.points()[best];
+      if (planes) p.normal = normals[best];
+      p.squared_distance_mm2 = (q - p.point).squaredNorm();
+    }
+  };
+}
+
+}  // namespace
+
+double robust_surface_score(const std::vector<Vec3>& points, const Transform& T,
+                            const KdTree& model_tree, const std::vector<Vec3>& model_normals,
+                            double spacing_mm, double cap_mm) {
+  if (points.empty() || model_tree.empty()) return 0.0;
+  const double cap2 = cap_mm * cap_mm;
+  double sum = 0.0;  // serial: a few thousand points, in a fixed order
+  std::uint32_t best = 0;
+  for (const Vec3& p : points)
+    sum += best_sample(model_tree, model_normals, spacing_mm, cap2, T * p, best);
+  return sum / static_cast<double>(points.size());
+}
+
+Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
+                                               const KdTree& model_tree,
+                                               const std::vector<Vec3>& model_normals,
+                                               const std::vector<Transform>& starts,
+                                               const OrientationSettings& settings,
+                                               const IcpSettings& icp_settings, int threads) {
+  if (starts.empty()) return fail("orientation: no candidate pose");
+  if (scan.empty() || model_tree.empty()) return fail("orientation: empty scan or model");
+  const std::vector<Vec3> refine_sample = strided_sample(scan, settings.refine_points);
+  const std::vector<Vec3> score_sample = strided_sample(scan, settings.score_points);
+  const double spacing = settings.spacing_allowance * model_sample_spacing(model_tree);
+  const IcpPairSearch pairs = best_sample_pairs(model_tree, model_normals, spacing);
+  IcpSettings s = icp_settings;
+  s.max_iterations = settings.refine_iterations;
+  s.threads = 1;  // parallel over the candidates instead
+  OrientationChoice choice;
+  choice.candidates.resize(starts.size());
+  parallel_tasks(starts.size(), threads, [&](std::size_t i) {
+    OrientationCandidate& c = choice.candidates[i];
+    c.T_cad_scan = starts[i];
+    auto fit = icp(refine_sample, pairs, starts[i], s);
+    if (fit) c.T_cad_scan = fit->T_target_source;
+    c.score_mm2 = robust_surface_score(score_sample, c.T_cad_scan, model_tree, model_normals,
+                                       spacing, settings.score_cap_mm);
+  });
+  const auto& cs = choice.candidates;
+  for (std::size_t i = 1; i < cs.size(); ++i)
+    if (cs[i].score_mm2 < cs[choice.best].score_mm2) choice.best = i;
+  const OrientationCandidate& best = cs[choice.best];
+  // The next distinct orientation that is not the same answer on a symmetric model.
+  const std::vector<Vec3> model_sample = strided_sample(model_tree.points(), kEquivalenceSamples);
+  double second = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    if (i == choice.best ||
+        rotation_apart_deg(cs[i].T_cad_scan, best.T_cad_scan) <= settings.distinct_pose_deg)
+      continue;
+    const Transform T_cad_cad = cs[i].T_cad_scan * best.T_cad_scan.inverse();
+    const double self = robust_surface_score(model_sample, T_cad_cad, model_tree, model_normals,
+                                             spacing, settings.score_cap_mm);
+    if (std::sqrt(self) <= settings.equivalent_rms_mm) {
+      choice.symmetric_model = true;
+      continue;
+    }
+    second = std::min(second, cs[i].score_mm2);
+  }
+  choice.ambiguity = std::isfinite(second) && second > 0.0 ? best.score_mm2 / second : 0.0;
+  if (std::isfinite(second) && second <= 0.0) choice.ambiguity = 1.0;
+  choice.ambiguous = choice.ambiguity > settings.ambiguous_error_ratio;
+  return choice;
+}
+
+}  // namespace springscan::analysis
