@@ -105,7 +105,12 @@ int main(int argc, char** argv) {
     const double err =
         Eigen::AngleAxisd(fit->T_cad_scan.linear() * T_scan_part.linear()).angle() / kDeg;
     if (fit->ambiguous) ++ambiguous[k];
-    if (err < 1.0 && !fit->ambiguous) ++right[k];
+    if (err < 1.0 && !fit->ambiguous)
+      ++right[k];
+    else
+      std::printf("miss: trial %d %s axis %d: %.2f deg off, ratio %.3f, %zu finalists\n", t,
+                  c.name.c_str(), (t / static_cast<int>(cases.size())) % 3, err,
+                  fit->orientation.ambiguity, fit->orientation.candidates.size());
   }
   int all_right = 0, all = 0;
   for (std::size_t k = 0; k < cases.size(); ++k) {
