@@ -17,7 +17,9 @@ constexpr std::size_t kSpacingSamples = 256;
 // A point's error is the least over this many nearest model samples.
 constexpr std::size_t kScoreNeighbors = 4;
 // Model samples moved onto the model to test two orientations for equivalence.
-constexpr std::size_t kEquivalenceSamples = 2000;
+constexpr std::size_t kEquivalenceSamples = 1000;
+// ... refined onto the model by at most this many ICP updates.
+constexpr int kEquivalenceIterations = 30;
 
 double rotation_apart_deg(const Transform& a, const Transform& b) {
   return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle() / kRadPerDeg;
@@ -129,17 +131,34 @@ Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
   const OrientationCandidate& best = cs[choice.best];
   // The next distinct orientation that is not the same answer on a symmetric model.
   const std::vector<Vec3> model_sample = strided_sample(model_tree.points(), kEquivalenceSamples);
+  // To convergence: an exact symmetry leaves no error. A symmetry of the model maps its centroid
+  // onto itself, which also fixes the directions the surface leaves free (a profile's length).
+  IcpSettings self_settings = s;
+  self_settings.error_ratio_stop = 0.0;
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : model_tree.points()) centroid += p;
+  centroid /= static_cast<double>(model_tree.size());
+  self_settings.max_iterations = kEquivalenceIterations;
   double second = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < cs.size(); ++i) {
     if (i == choice.best ||
         rotation_apart_deg(cs[i].T_cad_scan, best.T_cad_scan) <= settings.distinct_pose_deg)
       continue;
-    const Transform T_cad_cad = cs[i].T_cad_scan * best.T_cad_scan.inverse();
-    const double self = robust_surface_score(model_sample, T_cad_cad, model_tree, model_normals,
-                                             spacing, settings.score_cap_mm);
-    if (std::sqrt(self) <= settings.equivalent_rms_mm) {
-      choice.symmetric_model = true;
-      continue;
+    // Only a candidate that fits within noise of the best is tested for equivalence: the model
+    // moved by the motion between the two, refined onto itself (the two fits carry noise and
+    // springback, so their motion is near the model's symmetry, not on it).
+    const bool within_noise = best.score_mm2 > settings.ambiguous_error_ratio * cs[i].score_mm2;
+    if (within_noise) {
+      Transform T_cad_cad = cs[i].T_cad_scan * best.T_cad_scan.inverse();
+      T_cad_cad.translation() += centroid - T_cad_cad * centroid;
+      auto self_fit = icp(model_sample, pairs, T_cad_cad, self_settings);
+      if (self_fit) T_cad_cad = self_fit->T_target_source;
+      const double self = robust_surface_score(model_sample, T_cad_cad, model_tree, model_normals,
+                                               spacing, settings.score_cap_mm);
+      if (std::sqrt(self) <= settings.equivalent_rms_mm) {
+        choice.symmetric_model = true;
+        continue;
+      }
     }
     second = std::min(second, cs[i].score_mm2);
   }

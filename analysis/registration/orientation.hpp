@@ -30,9 +30,10 @@ struct OrientationSettings {
   double ambiguous_error_ratio = 0.9;  ///< ambiguous when best / next distinct orientation's
                                        ///< mean squared error exceeds this, (0, 1]
   double distinct_pose_deg = 5.0;      ///< orientations farther apart than this are distinct
-  double equivalent_rms_mm = 0.01;     ///< the model moved by the motion between two finalists
-                                       ///< fits itself within this robust rms: a symmetric
-                                       ///< model, the two orientations are the same answer
+  double equivalent_rms_mm = 0.02;     ///< the model moved by the motion between two finalists
+                                       ///< (centroid kept, refined onto itself) fits itself
+                                       ///< within this robust rms: a symmetric model, the two
+                                       ///< orientations are the same answer
 };
 
 struct OrientationCandidate {
