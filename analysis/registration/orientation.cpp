@@ -147,7 +147,7 @@ Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
     // Only a candidate that fits within noise of the best is tested for equivalence: the model
     // moved by the motion between the two, refined onto itself (the two fits carry noise and
     // springback, so their motion is near the model's symmetry, not on it).
-    const bool within_noise = best.score_mm2 > settings.ambiguous_error_ratio * cs[i].score_mm2;
+    const bool within_noise = best.score_mm2 >= settings.ambiguous_error_ratio * cs[i].score_mm2;
     if (within_noise) {
       Transform T_cad_cad = cs[i].T_cad_scan * best.T_cad_scan.inverse();
       T_cad_cad.translation() += centroid - T_cad_cad * centroid;
