@@ -1,6 +1,6 @@
 // Exact inside tests for trimmed faces: the UV triangulation is exact where the face boundary is
 // straight in UV; near curved trims (holes in planes, cut-outs) the chords are checked against
-// OpenCASCADE's face classifier.
+// OpenCASCADE's face classifier, one per thread at a time (FaceClassifierPool, cad/internal.hpp).
 #include <BRepAdaptor_Curve2d.hxx>
 #include <BRep_Tool.hxx>
 #include <TopExp_Explorer.hxx>
@@ -44,13 +44,50 @@ double segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
 }
 
 bool classify(const CadShape::Impl& shape, int face_id, const Eigen::Vector2d& uv) {
-  const auto& classifier = shape.classifiers[static_cast<std::size_t>(face_id)];
-  if (!classifier) return false;
-  const TopAbs_State state = classifier->Perform(gp_Pnt2d(uv.x(), uv.y()));
-  return state == TopAbs_IN || state == TopAbs_ON;
+  const auto& pool = shape.classifiers[static_cast<std::size_t>(face_id)];
+  return pool && pool->inside(uv);
 }
 
 }  // namespace
+
+FaceClassifierPool::FaceClassifierPool(const TopoDS_Face& face, double tolerance)
+    : face_(face), tolerance_(tolerance), built_(1) {
+  free_.push_back(std::make_unique<BRepTopAdaptor_FClass2d>(face_, tolerance_));
+}
+
+std::unique_ptr<BRepTopAdaptor_FClass2d> FaceClassifierPool::take() const {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (!free_.empty()) {
+      auto classifier = std::move(free_.back());
+      free_.pop_back();
+      return classifier;
+    }
+    // Room for this one's return, so that give_back, which runs in a destructor, never
+    // allocates.
+    free_.reserve(++built_);
+  }
+  // Every classifier is held by another thread: build one more, outside the lock (it
+  // polygonises the whole boundary), from the shared face, which construction only reads.
+  return std::make_unique<BRepTopAdaptor_FClass2d>(face_, tolerance_);
+}
+
+void FaceClassifierPool::give_back(std::unique_ptr<BRepTopAdaptor_FClass2d> classifier) const {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  free_.push_back(std::move(classifier));
+}
+
+bool FaceClassifierPool::inside(const Eigen::Vector2d& uv) const {
+  // The classifier goes back also when Perform throws (Standard_Failure): its only state
+  // besides what construction computed is the boundary sequences' access cache.
+  struct Lease {
+    const FaceClassifierPool& pool;
+    std::unique_ptr<BRepTopAdaptor_FClass2d> classifier;
+    ~Lease() { pool.give_back(std::move(classifier)); }
+  } lease{*this, take()};
+  const TopAbs_State state = lease.classifier->Perform(gp_Pnt2d(uv.x(), uv.y()));
+  return state == TopAbs_IN || state == TopAbs_ON;
+}
 
 void prepare_trimming(CadShape::Impl& impl, double linear_deflection_mm) {
   const CadMesh& mesh = impl.mesh;
@@ -62,7 +99,7 @@ void prepare_trimming(CadShape::Impl& impl, double linear_deflection_mm) {
     const TopoDS_Face& face = impl.face(static_cast<int>(f));
     impl.surfaces[f] = analytic_surface(face);
     curved[f] = has_curved_trim(face);
-    if (curved[f]) impl.classifiers[f] = std::make_unique<BRepTopAdaptor_FClass2d>(face, 1e-9);
+    if (curved[f]) impl.classifiers[f] = std::make_unique<FaceClassifierPool>(face, 1e-9);
   }
   // BRepMesh keeps edge chords within the linear deflection; twice that is a safe band.
   impl.trim_band_mm = 2.0 * linear_deflection_mm;
