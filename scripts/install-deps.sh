@@ -15,6 +15,8 @@ packages=(
   # scripts/package.sh and package-check.sh: dpkg-shlibdeps for CPack's DEB generator,
   # systemd-analyze verify, adduser for the package's postinst.
   dpkg-dev systemd adduser
+  # CI's format check, and the fuzz build (clang with libFuzzer's runtime).
+  clang-format clang libclang-rt-14-dev
 )
 # Reference implementations and third-party peers used by tests and benchmarks.
 if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
