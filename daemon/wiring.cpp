@@ -48,9 +48,9 @@ class PartModels {
       return cached->second;
     }
     auto settings = analysis::from_proto(part.settings.model());
-    if (!settings) return analysis::fail(std::string(kPartModelErrorPrefix) + settings.message());
+    if (!settings) return settings.error().prepend(kPartModelErrorPrefix);
     auto model = load(part, *settings);
-    if (!model) return analysis::fail(std::string(kPartModelErrorPrefix) + model.message());
+    if (!model) return model.error().prepend(kPartModelErrorPrefix);
     const auto& segmentation = (*model)->segmentation;
     log_.info("part " + std::to_string(part.part_id) + " (" + part.name + "): CAD model " +
               part.cad_file + " ready: " + std::to_string((*model)->face_count) + " faces, " +
@@ -65,11 +65,11 @@ class PartModels {
       const PartEntry& part, const analysis::CadModelSettings& settings) {
     if (cache_dir_.empty()) {
       auto model = analysis::load_part_model(part.cad_file, settings);
-      if (!model) return analysis::fail(model.message());
+      if (!model) return model.error();
       return std::make_shared<const analysis::PartModel>(std::move(*model));
     }
     auto loaded = analysis::load_part_model_cached(part.cad_file, cache_dir_, settings);
-    if (!loaded) return analysis::fail(loaded.message());
+    if (!loaded) return loaded.error();
     if (!loaded->cache_error.empty())
       log_.warning("model cache: " + loaded->cache_error + " (the model itself is fine)");
     log_.info("part " + std::to_string(part.part_id) + ": model cache " +
@@ -109,11 +109,12 @@ AnalyzeFn make_analysis(const std::vector<PartEntry>& parts, const std::string& 
              const analysis::PointCloud& scan) -> analysis::Expected<analysis::InspectionOutcome> {
     const PartEntry* part = models->entry(part_id);
     if (part == nullptr) {
-      return analysis::fail(std::string(kPartModelErrorPrefix) + "part " + std::to_string(part_id) +
-                            " is not in the catalogue");
+      return analysis::fail(analysis::ErrorCode::kNotFound, std::string(kPartModelErrorPrefix) +
+                                                                "part " + std::to_string(part_id) +
+                                                                " is not in the catalogue");
     }
     auto model = models->get(*part);
-    if (!model) return analysis::fail(model.message());
+    if (!model) return model.error();
     auto outcome = analysis::run_inspection(**model, scan, part->settings);
     if (outcome) outcome->report.mutable_input()->set_cad_file(part->cad_file);
     return outcome;
