@@ -23,3 +23,15 @@ if(SPRINGSCAN_SANITIZE)
   add_compile_options(${SPRINGSCAN_SANITIZER_FLAGS})
   add_link_options(${SPRINGSCAN_SANITIZER_FLAGS})
 endif()
+
+# ThreadSanitizer, likewise for the whole build. It cannot share a process with
+# AddressSanitizer, hence a build of its own (scripts/build.sh tsan, build-tsan/).
+if(SPRINGSCAN_TSAN)
+  if(SPRINGSCAN_SANITIZE)
+    message(FATAL_ERROR "SPRINGSCAN_TSAN and SPRINGSCAN_SANITIZE exclude each other "
+                        "(-fsanitize=thread cannot be combined with -fsanitize=address)")
+  endif()
+  set(SPRINGSCAN_SANITIZER_FLAGS -fsanitize=thread -fno-omit-frame-pointer)
+  add_compile_options(${SPRINGSCAN_SANITIZER_FLAGS})
+  add_link_options(${SPRINGSCAN_SANITIZER_FLAGS})
+endif()

@@ -2,13 +2,21 @@
 # Runs every springscan test: installs what is missing, builds (Release, incremental), runs CTest.
 #   scripts/test.sh             the Release build
 #   scripts/test.sh sanitize    the same suite under ASan + UBSan
+#   scripts/test.sh tsan        the analysis and daemon tests (HIL included) under ThreadSanitizer
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 kind=${1:-release}
 "$root/scripts/install-deps.sh"
 "$root/scripts/build.sh" "$kind"
-dir="$root/build"; [[ "$kind" == sanitize ]] && dir="$root/build-asan"
+select=()
+case "$kind" in
+  sanitize) dir="$root/build-asan" ;;
+  # build.sh tsan builds only the analysis and daemon test executables: their CTest labels.
+  tsan) dir="$root/build-tsan"; select=(-L '^(analysis|daemon)$') ;;
+  *) dir="$root/build" ;;
+esac
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
-ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)" --timeout 600
+export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1}
+ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)" --timeout 600 "${select[@]}"

@@ -9,6 +9,10 @@
 // uevents (unplug, replug) resolve their /sys paths and reach the daemon's libusb hotplug.
 
 #include <gtest/gtest.h>
+#if defined(__SANITIZE_THREAD__)
+#include <dlfcn.h>
+#include <sanitizer/tsan_interface.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -100,8 +104,24 @@ class HilTest : public ::testing::Test {
       asan = std::string(old) + ":" + asan;
     return std::make_unique<DaemonProcess>(
         SPRINGSCAND_EXE, config_path(), dir_.str(),
-        std::vector<std::string>{"LD_PRELOAD=" + simulators::umockdev_preload_library(),
+        std::vector<std::string>{"LD_PRELOAD=" + daemon_preload(),
                                  "UMOCKDEV_DIR=" + emulator_->root_dir(), "ASAN_OPTIONS=" + asan});
+  }
+
+  // The preload's wrappers (open, close, opendir, read, socket, ...) call libc directly, not
+  // the next definition. Ahead of ThreadSanitizer's runtime they hide those calls from it: it
+  // misses a descriptor being closed and reports the next file that reuses the number as a race
+  // between threads (seen: the runner's closedir against the main thread's old sd_notify
+  // socket). So under TSan its runtime comes first, as in this executable's own link order.
+  static std::string daemon_preload() {
+    std::string preload = simulators::umockdev_preload_library();
+#if defined(__SANITIZE_THREAD__)
+    Dl_info runtime{};
+    if (dladdr(reinterpret_cast<void*>(&__tsan_acquire), &runtime) != 0 &&
+        runtime.dli_fname != nullptr)
+      preload = std::string(runtime.dli_fname) + " " + preload;
+#endif
+    return preload;
   }
 
   static std::unique_ptr<simulators::PlcClient> plc(int port) {
