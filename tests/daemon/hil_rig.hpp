@@ -9,7 +9,7 @@
 // uevents (unplug, replug) resolve their /sys paths and reach the daemon's libusb hotplug.
 
 #include <gtest/gtest.h>
-#if defined(__SANITIZE_THREAD__)
+#if defined(SPRINGSCAN_TSAN)
 #include <dlfcn.h>
 #include <sanitizer/tsan_interface.h>
 #endif
@@ -115,7 +115,7 @@ class HilTest : public ::testing::Test {
   // socket). So under TSan its runtime comes first, as in this executable's own link order.
   static std::string daemon_preload() {
     std::string preload = simulators::umockdev_preload_library();
-#if defined(__SANITIZE_THREAD__)
+#if defined(SPRINGSCAN_TSAN)
     Dl_info runtime{};
     if (dladdr(reinterpret_cast<void*>(&__tsan_acquire), &runtime) != 0 &&
         runtime.dli_fname != nullptr)

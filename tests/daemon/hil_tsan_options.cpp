@@ -1,5 +1,5 @@
 // ThreadSanitizer defaults of the HIL test process (not of springscand, its child, which runs
-// with the plain TSAN_OPTIONS of scripts/test.sh tsan). Compiled only under -fsanitize=thread.
+// with the plain TSAN_OPTIONS of scripts/test.sh tsan). Compiled only in the TSan build.
 //
 // This process hosts umockdev's USB emulation: a GLib main loop on umockdev's worker thread
 // takes over devices, strings, closures and slice memory from the test's main thread. GLib and
@@ -13,6 +13,6 @@
 // ignore_noninstrumented_modules is TSan's option for exactly this case: it ignores only the
 // interceptors called from uninstrumented libraries; every access of our instrumented code,
 // on any thread, is still checked.
-#if defined(__SANITIZE_THREAD__)
+#if defined(SPRINGSCAN_TSAN)
 extern "C" const char* __tsan_default_options() { return "ignore_noninstrumented_modules=1"; }
 #endif

@@ -28,7 +28,7 @@ namespace {
 
 using testing::shared_cad;
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(__SANITIZE_ADDRESS__) || defined(SPRINGSCAN_TSAN)
 // The sanitizers run this code 5 to 15 times slower (about 5 s a part under ThreadSanitizer).
 // TSan cannot see inside OpenCASCADE (not instrumented); it reports a race of our own code on the
 // first overlapping access, so two repetitions suffice there.
