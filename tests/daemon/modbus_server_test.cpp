@@ -216,7 +216,7 @@ TEST(ModbusServer, UnitIdZeroIsAnsweredAndPageSelectPastTheLastPageIsRefused) {
   Context ctx = server.client();
   modbus_t* c = ctx.get();
   modbus_set_slave(c, 0);  // what pymodbus sends by default
-  std::uint16_t r[4] = {};
+  std::uint16_t r[regs::kHrWritableCount] = {};
   ASSERT_EQ(modbus_read_input_registers(c, regs::kIrMapVersion, 1, r), 1);
   EXPECT_EQ(r[0], regs::kMapVersion);
   ASSERT_EQ(modbus_write_register(c, regs::kHrPageSelect, regs::kPageCount - 1), 1);
