@@ -27,7 +27,8 @@ struct PartEntry {
 
 struct DaemonSettings {
   StationSettings station;
-  v1::ScannerConfig scanner;  ///< passed on to the driver as read
+  v1::ScannerConfig scanner;  ///< checked by drivers::check_scanner_config, then passed on as
+                              ///< read to drivers::make_scanner (the only way to a driver)
   std::vector<PartEntry> parts;
   std::string model_cache_dir = "/var/cache/springscan";
   LogLevel log_level = LogLevel::kInfo;

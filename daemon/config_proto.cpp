@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "daemon/config.hpp"
+#include "drivers/scanner_proto.hpp"
 
 namespace springscan::daemon {
 
@@ -221,23 +222,14 @@ std::string apply_parts(const v1::DaemonConfig& c, const Locator& at, const std:
 std::string apply_top_level(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
                             DaemonSettings& out) {
   const v1::ScannerConfig& sc = c.scanner();
-  std::string e;
-  if (sc.has_vendor_id() &&
-      !(e = out_of_range(at, {{"scanner", -1}, {"vendor_id", -1}}, sc.vendor_id(), 0u, 0xFFFFu))
-           .empty()) {
-    return e;
-  }
-  if (sc.has_product_id() &&
-      !(e = out_of_range(at, {{"scanner", -1}, {"product_id", -1}}, sc.product_id(), 0u, 0xFFFFu))
-           .empty()) {
-    return e;
-  }
-  if (sc.has_timeout_s() &&
-      !(e = out_of_range(at, {{"scanner", -1}, {"timeout_s", -1}}, sc.timeout_s(), 0.1, 3600.0))
-           .empty()) {
-    return e;
+  // The scanner section is checked by the driver's own conversion, the one place that knows its
+  // fields and ranges (drivers/scanner_proto.hpp); main() builds the driver from the same
+  // message with drivers::make_scanner.
+  if (auto checked = drivers::check_scanner_config(sc); !checked) {
+    return at.where({{"scanner", -1}}) + ": " + checked.message();
   }
   out.scanner = sc;
+  std::string e;
   if (c.has_report_dir()) {
     if (c.report_dir().empty()) return at.where({{"report_dir", -1}}) + ": is empty";
     out.station.reports.directory = resolve(c.report_dir(), file);

@@ -17,6 +17,7 @@
 #include "daemon/result_publisher.hpp"
 #include "daemon/station.hpp"
 #include "daemon/wiring.hpp"
+#include "drivers/scanner_proto.hpp"
 
 namespace {
 
@@ -119,9 +120,17 @@ int main(int argc, char** argv) {
   }
   const MosquittoLibrary mosquitto_library;
   install_signal_handlers();
-  auto scanner = make_scanner(settings->scanner, log);
+  // The one way from the config to a driver (drivers/scanner_proto.hpp), calibration included.
+  auto scanner = springscan::drivers::make_scanner(settings->scanner);
+  if (!scanner) {
+    log.error("invalid config: " + scanner.message());
+    return 2;
+  }
+  const bool tactile = settings->scanner.kind() == springscan::v1::ScannerConfig::TACTILE_PROBE;
+  log.info(std::string("scanner: ") + (tactile ? "tactile probe" : "laser line") +
+           (settings->scanner.serial().empty() ? "" : " serial " + settings->scanner.serial()));
   auto station = Station::create(
-      settings->station, *scanner, make_analysis(settings->parts, settings->model_cache_dir, log),
+      settings->station, **scanner, make_analysis(settings->parts, settings->model_cache_dir, log),
       log, [](const std::string& message) { sd_notify(0, message.c_str()); });
   if (!station) {
     log.error("cannot start: " + station.message());

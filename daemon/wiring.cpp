@@ -7,24 +7,10 @@
 #include "analysis/cad/model.hpp"
 #include "analysis/inspection/pipeline.hpp"
 #include "analysis/messages/cad_model_proto.hpp"
-#include "drivers/laser_scanner.hpp"
-#include "drivers/protocol.hpp"
-#include "drivers/tactile_scanner.hpp"
 
 namespace springscan::daemon {
 
 namespace {
-
-drivers::LinkSettings link_settings(const v1::ScannerConfig& config, std::uint16_t default_pid) {
-  drivers::LinkSettings link;
-  link.usb.vendor_id = config.has_vendor_id() ? static_cast<std::uint16_t>(config.vendor_id())
-                                              : drivers::protocol::kVendorId;
-  link.usb.product_id =
-      config.has_product_id() ? static_cast<std::uint16_t>(config.product_id()) : default_pid;
-  link.usb.serial = config.serial();
-  if (config.has_timeout_s()) link.data_timeout_ms = static_cast<int>(config.timeout_s() * 1000);
-  return link;
-}
 
 /// The CAD model of each part, loaded on first use (on the runner's thread) and kept: import,
 /// even samples with exact normals, the segmentation into flanges and bends, and the exact
@@ -85,21 +71,6 @@ class PartModels {
 };
 
 }  // namespace
-
-std::unique_ptr<drivers::Scanner> make_scanner(const v1::ScannerConfig& config, Log& log) {
-  if (config.kind() == v1::ScannerConfig::TACTILE_PROBE) {
-    drivers::TactileScannerSettings settings;
-    settings.link = link_settings(config, drivers::protocol::kProductIdTactile);
-    log.info("scanner: tactile probe, USB " + std::to_string(settings.link.usb.vendor_id) + ":" +
-             std::to_string(settings.link.usb.product_id));
-    return std::make_unique<drivers::TactileProbeScanner>(settings);
-  }
-  drivers::LaserScannerSettings settings;
-  settings.link = link_settings(config, drivers::protocol::kProductIdLaser);
-  log.info("scanner: laser line, USB " + std::to_string(settings.link.usb.vendor_id) + ":" +
-           std::to_string(settings.link.usb.product_id));
-  return std::make_unique<drivers::LaserLineScanner>(settings);
-}
 
 AnalyzeFn make_analysis(const std::vector<PartEntry>& parts, const std::string& model_cache_dir,
                         Log& log) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <string>
+#include <variant>
 
 namespace springscan::drivers {
 namespace {
@@ -76,22 +77,44 @@ analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(const v1:
   return s;
 }
 
-analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfig& c) {
+namespace {
+
+// The driver settings for `c.kind`: what make_scanner builds from and check_scanner_config checks.
+using KindSettings = std::variant<LaserScannerSettings, TactileScannerSettings>;
+
+analysis::Expected<KindSettings> settings_for_kind(const v1::ScannerConfig& c) {
   switch (c.kind()) {
+    case v1::ScannerConfig::KIND_UNSPECIFIED:  // the default kind, like the other defaults
     case v1::ScannerConfig::LASER_LINE: {
       auto s = laser_settings_from_proto(c);
       if (!s) return s.error();
-      return std::unique_ptr<Scanner>(std::make_unique<LaserLineScanner>(*s));
+      return KindSettings(std::move(*s));
     }
     case v1::ScannerConfig::TACTILE_PROBE: {
       auto s = tactile_settings_from_proto(c);
       if (!s) return s.error();
-      return std::unique_ptr<Scanner>(std::make_unique<TactileProbeScanner>(*s));
+      return KindSettings(std::move(*s));
     }
     default:
-      return fail("scanner.kind = " + v1::ScannerConfig::Kind_Name(c.kind()) +
-                  " (LASER_LINE or TACTILE_PROBE)");
+      return fail("scanner.kind = " + std::to_string(c.kind()) + " (LASER_LINE or TACTILE_PROBE)");
   }
+}
+
+}  // namespace
+
+analysis::Expected<bool> check_scanner_config(const v1::ScannerConfig& c) {
+  auto settings = settings_for_kind(c);
+  if (!settings) return settings.error();
+  return true;
+}
+
+analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfig& c) {
+  auto settings = settings_for_kind(c);
+  if (!settings) return settings.error();
+  if (const auto* laser = std::get_if<LaserScannerSettings>(&*settings))
+    return std::unique_ptr<Scanner>(std::make_unique<LaserLineScanner>(*laser));
+  return std::unique_ptr<Scanner>(
+      std::make_unique<TactileProbeScanner>(std::get<TactileScannerSettings>(*settings)));
 }
 
 }  // namespace springscan::drivers

@@ -18,8 +18,14 @@ analysis::Expected<LaserScannerSettings> laser_settings_from_proto(const v1::Sca
 analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(
     const v1::ScannerConfig& config);
 
-/// The driver for `config.kind` (LASER_LINE or TACTILE_PROBE), not yet opened: it opens the
-/// device on first use and again after an unplug.
+/// The driver for `config.kind` (LASER_LINE, the default when unset, or TACTILE_PROBE), not yet
+/// opened: it opens the device on first use and again after an unplug. The only way from a
+/// config to a driver: the daemon (daemon/main.cpp) and `springscan scan` both call it, so the
+/// laser calibration and t_part_machine reach every scan. Errors name the field and the value.
 analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfig& config);
+
+/// The error make_scanner(config) would return, without constructing a driver (no libusb
+/// context): for checking a config at load (springscand --check). true when it is usable.
+analysis::Expected<bool> check_scanner_config(const v1::ScannerConfig& config);
 
 }  // namespace springscan::drivers

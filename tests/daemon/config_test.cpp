@@ -141,7 +141,7 @@ TEST_F(ConfigTest, OtherRangeErrors) {
             std::string::npos);
   EXPECT_NE(parse(std::string(kMinimal) + "scanner { vendor_id: 70000 }")
                 .message()
-                .find("scanner.vendor_id: 70000"),
+                .find("scanner: scanner.vendor_id = 70000 (1..65535)"),
             std::string::npos);
 }
 

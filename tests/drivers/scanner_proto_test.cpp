@@ -58,11 +58,18 @@ TEST(ScannerProto, TactileTransformMustBeRigidWithSixteenNumbers) {
   EXPECT_FALSE(tactile_settings_from_proto(c).ok());
 }
 
-TEST(ScannerProto, MakeScannerNeedsAKind) {
-  v1::ScannerConfig c;
-  EXPECT_FALSE(make_scanner(c).ok());
+TEST(ScannerProto, MakeScannerDefaultsToTheLaserAndRefusesAnUnknownKind) {
+  v1::ScannerConfig c;  // no kind: the laser line scanner, like springscand always did
+  EXPECT_TRUE(make_scanner(c).ok());
+  EXPECT_TRUE(check_scanner_config(c).ok());
   c.set_kind(v1::ScannerConfig::TACTILE_PROBE);
   EXPECT_TRUE(make_scanner(c).ok());
+  c.set_kind(static_cast<v1::ScannerConfig::Kind>(7));
+  EXPECT_NE(make_scanner(c).message().find("scanner.kind = 7"), std::string::npos);
+  EXPECT_FALSE(check_scanner_config(c).ok());
+  c.set_kind(v1::ScannerConfig::LASER_LINE);
+  c.mutable_laser_calibration()->mutable_x_axis()->set_x(2.0);  // not a unit vector
+  EXPECT_FALSE(check_scanner_config(c).ok());
 }
 
 }  // namespace
