@@ -171,8 +171,7 @@ int analyze_main(int argc, char** argv) {
   if (ec) return fail_with(kName, args.get("out") + ": cannot create: " + ec.message(), kExitUsage);
   auto written = report::write_inspection_files(args.get("out"), *outcome);
   if (!written) return fail_with(kName, written.message(), kExitUsage);
-  auto html = report::write_report_html_in_dir(args.get("out"), report, outcome->deviation_cloud);
-  if (!html) log.warning("report.html not written: " + html.message());
+  if (!written->html_error.empty()) log.warning("report.html not written: " + written->html_error);
   print_summary(report, args.get("out"));
   return kExitOk;
 }

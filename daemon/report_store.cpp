@@ -6,13 +6,12 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <vector>
 
-#include "analysis/io/file_io.hpp"
 #include "report/inspection_files.hpp"
-#include "report/report_html.hpp"
 
 namespace springscan::daemon {
 
@@ -115,26 +114,13 @@ Expected<std::string> ReportStore::persist(std::uint64_t record, const v1::Inspe
   std::error_code ec;
   fs::remove_all(temp, ec);
   if (!fs::create_directory(temp, ec)) return fail("cannot create " + temp + ": " + ec.message());
-  // The same files as `springscan analyze` writes (report/inspection_files.hpp), plus report.html.
-  auto json = report::report_to_json(report);
-  if (!json) return fail("report for record " + std::to_string(record) + ": " + json.message());
-  std::vector<std::pair<std::string, std::string>> files = {
-      {"report.pb", report.SerializeAsString()}, {"report.json", std::move(*json)}};
-  if (deviation_cloud != nullptr && !deviation_cloud->empty()) {
-    auto ply =
-        report::format_deviation_ply(*deviation_cloud, report::deviation_color_scale_mm(report));
-    if (!ply)
-      return fail("deviation.ply for record " + std::to_string(record) + ": " + ply.message());
-    files.emplace_back("deviation.ply", std::move(*ply));
-  }
-  // The page a quality engineer opens; an empty cloud still renders, without pictures.
-  static const analysis::PointCloud kNoCloud;
-  auto html = report::render_report_html(report, deviation_cloud ? *deviation_cloud : kNoCloud);
-  if (html) files.emplace_back("report.html", std::move(*html));
-  for (const auto& [name, bytes] : files) {
-    auto written = analysis::write_file_atomically(temp + "/" + name, bytes);
-    if (!written) return fail(written.message());
-  }
+  // Every file of the record through the one writer `springscan analyze` uses
+  // (report/inspection_files.hpp): report.json, deviation.ply, report.html, report.pb. The
+  // copy costs a few ms per inspection; job_runner hands the report and cloud over separately.
+  analysis::InspectionOutcome outcome{
+      report, deviation_cloud != nullptr ? *deviation_cloud : analysis::PointCloud{}};
+  auto written = report::write_inspection_files(temp, outcome);
+  if (!written) return fail("record " + std::to_string(record) + ": " + written.message());
   if (::rename(temp.c_str(), final_path.c_str()) != 0) {
     return fail(system_error("cannot rename report into", final_path));
   }

@@ -1,8 +1,9 @@
 #pragma once
-// The report store: one directory per inspection result, <report_dir>/r<record>/ holding
-// report.pb, report.json and deviation.ply. A record is written into a hidden temporary
-// directory, every file fsynced, then renamed into place and the parent fsynced, so after a
-// crash a record is either complete or absent; leftovers are removed at open. Records are
+// The report store: one directory per inspection result, <report_dir>/r<record>/ holding the
+// files report::write_inspection_files writes (report.pb, report.json, deviation.ply,
+// report.html). A record is written into a hidden temporary directory, every file fsynced, then
+// renamed into place and the parent fsynced, so after a crash a record is either complete or
+// absent; leftovers are removed at open. Records are
 // numbered 1, 2, ... over the station's life; RESULT_SEQ is derived from the number
 // (regs::result_seq_from_record), so sequence numbers continue across restarts.
 //
@@ -38,8 +39,9 @@ class ReportStore {
   /// The report of the newest complete record, or nullopt when there is none. An unreadable
   /// newest record is an error (the caller then shows "no result").
   analysis::Expected<std::optional<v1::InspectionReport>> load_latest() const;
-  /// Writes record `record` (must be above last_record()): report.pb, report.json and, when
-  /// `deviation_cloud` has points, deviation.ply. Returns the record's directory.
+  /// Writes record `record` (must be above last_record()) with report::write_inspection_files;
+  /// without `deviation_cloud` (a failed scan) deviation.ply has no vertices. report.html is
+  /// left out when it cannot be drawn. Returns the record's directory.
   analysis::Expected<std::string> persist(std::uint64_t record, const v1::InspectionReport& report,
                                           const analysis::PointCloud* deviation_cloud);
   /// The directory of record `record`.

@@ -9,6 +9,7 @@
 
 #include "analysis/deviation/deviation.hpp"
 #include "analysis/io/point_io.hpp"
+#include "report/report_html.hpp"
 
 namespace springscan::report {
 
@@ -64,7 +65,8 @@ Expected<std::string> format_deviation_ply(const PointCloud& cloud, double scale
   return format_ply(deviation, ply);
 }
 
-Expected<bool> write_inspection_files(const std::string& dir, const InspectionOutcome& outcome) {
+Expected<InspectionFiles> write_inspection_files(const std::string& dir,
+                                                 const InspectionOutcome& outcome) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) return fail("cannot create report directory '" + dir + "': " + ec.message());
@@ -101,10 +103,17 @@ Expected<bool> write_inspection_files(const std::string& dir, const InspectionOu
       return written.error();
   }
 
+  InspectionFiles files;
+  auto html = write_report_html_in_dir(dir, outcome.report, outcome.deviation_cloud);
+  if (!html) files.html_error = html.message();
+
   // Last: a present report.pb means the other two files are complete (the daemon relies on it).
   std::string pb;
   if (!outcome.report.SerializeToString(&pb)) return fail("cannot serialize the report");
-  return write_file_atomically(join(dir, "report.pb"), pb);
+  if (auto written = write_file_atomically(join(dir, "report.pb"), pb); !written) {
+    return written.error();
+  }
+  return files;
 }
 
 Expected<v1::InspectionReport> read_report_pb(const std::string& path) {

@@ -5,8 +5,10 @@
 //   DIR/report.pb      the same message in protobuf binary
 //   DIR/deviation.ply  the scan points in the CAD frame coloured by signed deviation, with the
 //                      deviation itself as the vertex property `signed_deviation_mm`
+//   DIR/report.html    the page a quality engineer opens (report_html.hpp)
 // Every file is written atomically (file_io.hpp), report.pb last: when report.pb is there, the
-// whole set is.
+// whole set is. `springscan analyze` and the daemon's report store both write through
+// write_inspection_files, so the two leave the same files.
 
 #include <string>
 #include <string_view>
@@ -42,12 +44,22 @@ Expected<v1::InspectionReport> report_from_json(std::string_view json);
 /// daemon's report store writes the same bytes.
 Expected<std::string> format_deviation_ply(const PointCloud& cloud, double scale_mm);
 
-/// Writes report.json, deviation.ply and report.pb into `dir` (created when missing), each
-/// atomically. deviation.ply holds outcome.deviation_cloud with colours from deviation_color at
-/// deviation_color_scale_mm(outcome.report) when the cloud has scalars (the signed deviations),
-/// and the points alone otherwise (colours it already has are then kept). Errors name the file and
-/// the reason. Not thread-safe for the same `dir`.
-Expected<bool> write_inspection_files(const std::string& dir, const InspectionOutcome& outcome);
+/// What write_inspection_files wrote beyond the files it guarantees.
+struct InspectionFiles {
+  /// Why report.html is missing ("" when it was written). The page is not part of the
+  /// guaranteed set: a picture that cannot be drawn must not cost the PLC its result.
+  std::string html_error;
+};
+
+/// Writes report.json, deviation.ply, report.html and report.pb into `dir` (created when
+/// missing), each atomically, in that order. deviation.ply holds outcome.deviation_cloud with
+/// colours from deviation_color at deviation_color_scale_mm(outcome.report) when the cloud has
+/// scalars (the signed deviations), and the points alone otherwise (colours it already has are
+/// then kept); an empty cloud (a scan that failed) gives a PLY without vertices, and a page
+/// without pictures. Errors name the file and the reason; a page that could not be rendered is
+/// not an error (InspectionFiles::html_error). Not thread-safe for the same `dir`.
+Expected<InspectionFiles> write_inspection_files(const std::string& dir,
+                                                 const InspectionOutcome& outcome);
 
 /// Reads a report.pb written by write_inspection_files.
 Expected<v1::InspectionReport> read_report_pb(const std::string& path);

@@ -36,6 +36,11 @@ TEST(ReportStore, PersistsAllFilesAndReloadsTheNewest) {
   ASSERT_TRUE(store->persist(2, report_with_seq(2), nullptr).ok());
   EXPECT_TRUE(fs::exists(*path + "/report.pb"));
   EXPECT_TRUE(fs::exists(*path + "/report.json"));
+  EXPECT_TRUE(fs::exists(*path + "/report.html"));  // report::write_inspection_files writes all
+  const std::string failed_scan = store->record_path(2);
+  for (const char* name : {"report.pb", "report.json", "report.html", "deviation.ply"})
+    EXPECT_TRUE(fs::exists(failed_scan + "/" + name)) << name;
+  EXPECT_EQ(analysis::read_point_cloud(failed_scan + "/deviation.ply")->size(), 0u);
   // The same deviation.ply as `springscan analyze` writes (docs/report-format.md): the points,
   // the signed deviation as `signed_deviation_mm`, colours from analysis::deviation_color.
   analysis::PointReadOptions by_name;

@@ -62,11 +62,13 @@ TEST(ReportFiles, ColourScaleComesFromTheReport) {
   EXPECT_EQ(deviation_color_scale_mm(report), 2.0);
 }
 
-TEST(ReportFiles, RoundTripAllThreeFiles) {
+TEST(ReportFiles, RoundTripAllFiles) {
   const fs::path dir = fresh_dir("springscan_report_files") / "nested";
   const InspectionOutcome outcome = sample_outcome();
   auto written = write_inspection_files(dir.string(), outcome);
   ASSERT_TRUE(written) << written.message();
+  EXPECT_EQ(written->html_error, "");
+  EXPECT_TRUE(fs::exists(dir / "report.html"));
   EXPECT_TRUE(leftover_temporaries(dir).empty());
 
   auto pb = read_report_pb((dir / "report.pb").string());
