@@ -15,6 +15,7 @@
 #include "analysis/io/point_io.hpp"
 #include "analysis/io/sha256.hpp"
 #include "analysis/messages/cad_model_proto.hpp"
+#include "analysis/messages/verdict_proto.hpp"
 #include "cli/cli_common.hpp"
 #include "report/inspection_files.hpp"
 #include "report/report_html.hpp"
@@ -131,17 +132,18 @@ int analyze_main(int argc, char** argv) {
   for (const char* name : {"tolerance", "angle-tolerance"}) {
     if (!args.has(name)) continue;
     const auto value = args.get_number(name);
-    if (!value || !(*value > 0.0))
-      return fail_with(
-          kName, std::string("--") + name + " " + args.get(name) + ": expected a positive number",
-          kExitUsage);
+    if (!value)
+      return fail_with(kName, std::string("--") + name + " " + args.get(name) + ": not a number",
+                       kExitUsage);
+    // The verdict owns both tolerances; its loader checks them (one range, verdict_proto.hpp).
     if (std::string(name) == "tolerance") {
-      settings.mutable_deviation()->set_tolerance_mm(*value);
       settings.mutable_verdict()->set_tolerance_mm(*value);
     } else {
       settings.mutable_verdict()->set_angle_tolerance_deg(*value);
     }
   }
+  if (auto verdict = analysis::verdict_settings_from_proto(settings); !verdict)
+    return fail_with(kName, verdict.message(), kExitUsage);
 
   auto start = Clock::now();
   auto scan = analysis::read_point_cloud(args.get("scan"));

@@ -1,5 +1,6 @@
 #include "report/report_html.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -13,11 +14,10 @@
 namespace springscan::report {
 namespace {
 
-// The tolerance the colour map marks: the deviation stage's, else the verdict's.
+// The tolerance the colour map marks: the one the verdict judged the surface by, which the
+// report keeps in deviation.tolerance_mm (analysis/messages/verdict_proto.hpp).
 double tolerance_of(const v1::InspectionReport& report) {
-  if (report.deviation().tolerance_mm() > 0) return report.deviation().tolerance_mm();
-  const auto& verdict = report.settings().verdict();
-  return verdict.has_tolerance_mm() ? verdict.tolerance_mm() : 0.0;
+  return std::max(report.deviation().tolerance_mm(), 0.0);
 }
 
 // |deviation| drawn full blue or red: the setting, else the rule deviation.ply is coloured

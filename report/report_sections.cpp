@@ -25,12 +25,6 @@ std::string mm(double value, int decimals = 3) { return fixed(value, decimals) +
 std::string count(std::int64_t n) { return std::to_string(n); }
 std::string yes_no(bool value) { return value ? "yes" : "no"; }
 
-double bend_tolerance(const v1::InspectionReport& report, const v1::Bend& bend) {
-  if (bend.angle_tolerance_deg() > 0) return bend.angle_tolerance_deg();
-  const auto& verdict = report.settings().verdict();
-  return verdict.has_angle_tolerance_deg() ? verdict.angle_tolerance_deg() : 0.0;
-}
-
 std::string status_cell(const char* css, const char* word) {
   return std::string("<td><span class='status ") + css + "'>" + word + "</span></td>";
 }
@@ -89,7 +83,7 @@ std::string bend_table(const v1::InspectionReport& report) {
             fixed(bend.nominal_angle_deg(), 2) + "</td><td class='num'>" +
             (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") + "</td><td class='num'>" +
             (measured ? signed_fixed(bend.springback_deg(), 2) : "&mdash;") +
-            "</td><td class='num'>" + fixed(bend_tolerance(report, bend), 2) +
+            "</td><td class='num'>" + fixed(bend.angle_tolerance_deg(), 2) +
             "</td><td class='num'>" + fixed(bend.radius_mm(), 1) + "</td><td class='num'>" +
             std::to_string(bend.segment_a()) + " / " + std::to_string(bend.segment_b()) + "</td>" +
             (!measured     ? status_cell("nm", "NOT MEASURED")

@@ -161,9 +161,6 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
                                            const PartModel& model, const KdTree& model_tree,
                                            const DeviationSettings& settings) {
   if (!all_finite(scan_in_cad)) return fail("deviation: the scan has non-finite coordinates");
-  if (!(settings.tolerance_mm > 0.0))
-    return fail("deviation: tolerance_mm must be > 0, got " +
-                std::to_string(settings.tolerance_mm));
   DeviationResult result;
   result.exact = model.distance != nullptr;
   if (!result.exact) {
@@ -191,32 +188,28 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
           model.samples.normals[j].dot(scan_in_cad[i] - model_tree.points()[j]);
     }
   }
-  result.statistics = deviation_statistics(result.signed_distance_mm, settings.tolerance_mm);
+  result.statistics = deviation_statistics(result.signed_distance_mm);
   return result;
 }
 
-DeviationStatistics deviation_statistics(const std::vector<double>& d, double tolerance_mm) {
+DeviationStatistics deviation_statistics(const std::vector<double>& d) {
   DeviationStatistics s;
-  s.tolerance_mm = tolerance_mm;
   s.points = d.size();
   if (d.empty()) return s;
   struct Sums {
     double sum = 0.0, sum2 = 0.0;
-    std::size_t out = 0;
   };
   std::vector<Sums> partial(block_count(d.size()));
   parallel_blocks(d.size(), 0, [&](std::size_t b, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       partial[b].sum += d[i];
       partial[b].sum2 += d[i] * d[i];
-      if (std::abs(d[i]) > tolerance_mm) ++partial[b].out;
     }
   });
   Sums total;
   for (const auto& p : partial) {  // block order: independent of the thread count
     total.sum += p.sum;
     total.sum2 += p.sum2;
-    total.out += p.out;
   }
   const auto [lo, hi] = std::minmax_element(d.begin(), d.end());
   s.min_mm = *lo;
@@ -224,7 +217,6 @@ DeviationStatistics deviation_statistics(const std::vector<double>& d, double to
   const auto n = static_cast<double>(d.size());
   s.mean_mm = total.sum / n;
   s.rms_mm = std::sqrt(total.sum2 / n);
-  s.fraction_out_of_tolerance = static_cast<double>(total.out) / n;
   std::vector<double> magnitude(d.size());
   std::transform(d.begin(), d.end(), magnitude.begin(), [](double v) { return std::abs(v); });
   // Nearest rank: the smallest value with at least 95 % of the values at or below it.

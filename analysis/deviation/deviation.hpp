@@ -3,6 +3,8 @@
 // frame) to the model surface, positive on the side the surface normal points to, and its
 // statistics. Exact CAD distance through PartModel::distance when the model has it; otherwise
 // the distance to the tangent plane of the nearest model sample (sign by the sample normal).
+// The stage measures and does not judge: the surface tolerance, and with it the share of points
+// out of tolerance, belong to the verdict (analysis/inspection/verdict.hpp).
 
 #include <cstddef>
 #include <vector>
@@ -15,8 +17,8 @@
 namespace springscan::analysis {
 
 struct DeviationSettings {
-  double tolerance_mm = 0.5;    ///< |signed distance| beyond this is out of tolerance
-  double color_scale_mm = 0.0;  ///< |d| shown as full blue/red; 0 = tolerance_mm
+  double color_scale_mm = 0.0;  ///< |d| shown as full blue/red; 0 = the verdict's surface
+                                ///< tolerance_mm (the pipeline fills it in)
   double cell_size_mm = 0.0;    ///< grid of the batched nearest search; 0 = 3 x the median
                                 ///< model sample spacing (speed only: the result is exact)
   int threads = 0;              ///< worker threads, 0 = all cores; no effect on the result
@@ -27,10 +29,8 @@ struct DeviationStatistics {
   double max_mm = 0.0;
   double mean_mm = 0.0;
   double rms_mm = 0.0;
-  double p95_mm = 0.0;  ///< 95th percentile of |d| (nearest rank)
-  double fraction_out_of_tolerance = 0.0;
-  double tolerance_mm = 0.0;
-  std::size_t points = 0;
+  double p95_mm = 0.0;     ///< 95th percentile of |d| (nearest rank)
+  std::size_t points = 0;  ///< distances the statistics are taken over (0: none computed)
 };
 
 struct DeviationResult {
@@ -54,8 +54,7 @@ std::vector<std::uint32_t> nearest_samples(const std::vector<Vec3>& points,
                                            const DeviationSettings& settings = {});
 
 /// Statistics of signed distances (deterministic, exact percentile).
-DeviationStatistics deviation_statistics(const std::vector<double>& signed_distance_mm,
-                                         double tolerance_mm);
+DeviationStatistics deviation_statistics(const std::vector<double>& signed_distance_mm);
 
 /// Root mean square of `values` over the smallest (1 - trimmed_fraction) of their magnitudes
 /// (outliers left out), mm; 0 for none. trimmed_fraction is clamped to [0, 0.99].

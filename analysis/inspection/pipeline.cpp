@@ -17,6 +17,7 @@
 #include "analysis/messages/matching_proto.hpp"
 #include "analysis/messages/settings_proto.hpp"
 #include "analysis/messages/springback_proto.hpp"
+#include "analysis/messages/verdict_proto.hpp"
 #include "analysis/preprocess/reduction.hpp"
 #include "analysis/registration/global_fit.hpp"
 
@@ -48,36 +49,25 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto normals = from_proto(m.normals());
   auto reduction = from_proto(m.reduction());
   auto fit = from_proto(m.registration());
-  auto deviation = from_proto(m.deviation());
   auto springback = from_proto(m.local_fit());
   auto field = from_proto(m.matching());
   auto compensation = from_proto(m.compensation());
-  auto verdict = from_proto(m.verdict());
+  // Every tolerance, the deviation section's tolerance_mm included, is the verdict's.
+  auto verdict = verdict_settings_from_proto(m);
   for (const std::string* error :
        {threads ? nullptr : &threads.message(), normals ? nullptr : &normals.message(),
         reduction ? nullptr : &reduction.message(), fit ? nullptr : &fit.message(),
-        deviation ? nullptr : &deviation.message(), springback ? nullptr : &springback.message(),
-        field ? nullptr : &field.message(), compensation ? nullptr : &compensation.message(),
-        verdict ? nullptr : &verdict.message()})
+        springback ? nullptr : &springback.message(), field ? nullptr : &field.message(),
+        compensation ? nullptr : &compensation.message(), verdict ? nullptr : &verdict.message()})
     if (error) return fail(*error);
   s.threads = *threads;
   s.normals = *normals;
   s.reduction = *reduction;
   s.global_fit = *fit;
-  s.deviation = *deviation;
   s.springback = *springback;
   s.field = *field;
   s.compensation = *compensation;
   s.verdict = *verdict;
-  // Without its own tolerance the verdict judges against the deviation stage's (--tolerance).
-  if (!m.verdict().has_tolerance_mm()) s.verdict.tolerance_mm = s.deviation.tolerance_mm;
-  // The per-bend pass uses the verdict's angle tolerance (--angle-tolerance, settings file).
-  if (m.verdict().has_angle_tolerance_deg()) {
-    if (!(m.verdict().angle_tolerance_deg() > 0.0))
-      return fail("settings: verdict.angle_tolerance_deg = " +
-                  std::to_string(m.verdict().angle_tolerance_deg()) + " (must be > 0)");
-    s.springback.angle_tolerance_deg = m.verdict().angle_tolerance_deg();
-  }
   s.springback.threads = s.field.refinement.threads = s.threads;
   s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
   s.deviation.threads = s.reduction.curvature.threads = s.threads;
@@ -91,7 +81,9 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   to_proto(s.normals, out->mutable_normals());
   to_proto(s.reduction, out->mutable_reduction());
   to_proto(s.global_fit, out->mutable_registration());
-  to_proto(s.deviation, out->mutable_deviation());
+  // deviation.tolerance_mm is the older spelling of verdict.tolerance_mm: both show the value
+  // in force, so a reader of either sees the tolerance the part was judged by.
+  out->mutable_deviation()->set_tolerance_mm(s.verdict.tolerance_mm);
   to_proto(s.springback, out->mutable_local_fit());
   to_proto(s.field, out->mutable_matching());
   to_proto(s.compensation, out->mutable_compensation());
@@ -141,7 +133,8 @@ PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviat
 // Stages 6-7: local best fits of the CAD flanges and the bend table (docs/springback.md). A
 // model without flanges has no bends to measure; a model the stage cannot use (no face ids)
 // gives a warning rather than failing the whole inspection.
-// Returns the stage's result for the deformation field (its flange motions), if it ran.
+// Returns the stage's result for the deformation field (its flange motions) and the verdict
+// (its bends), if it ran.
 std::optional<SpringbackResult> add_bend_table(const PartModel& model,
                                                const PointCloud& scan_in_cad,
                                                const SpringbackSettings& settings,
@@ -174,12 +167,13 @@ void control_point_attributes(const PartModel& model, const KdTree& model_tree,
 // Stages 8-9: the deformation field between the k-center-reduced model and scan (paper §5,
 // exact matching with its certificate), refined to sub-sample accuracy with the flanges'
 // motions and the scan's local surface, and the compensation vectors at the k-center model
-// points (docs/matching.md).
-std::optional<Error> add_deformation(const PartModel& model, const KdTree& model_tree,
-                                     const ReductionOutcome& reduced, const Transform& T_cad_scan,
-                                     const std::vector<Vec3>& scan_in_cad,
-                                     const SpringbackResult* springback, const PipelineSettings& s,
-                                     InspectionOutcome& out) {
+// points (docs/matching.md). Returns the field's coverage for the verdict.
+Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& model_tree,
+                                        const ReductionOutcome& reduced,
+                                        const Transform& T_cad_scan,
+                                        const std::vector<Vec3>& scan_in_cad,
+                                        const SpringbackResult* springback,
+                                        const PipelineSettings& s, InspectionOutcome& out) {
   v1::InspectionReport& report = out.report;
   std::vector<Vec3> scan_centers;
   scan_centers.reserve(reduced.scan_centers.size());
@@ -218,7 +212,7 @@ std::optional<Error> add_deformation(const PartModel& model, const KdTree& model
       out.compensated_surface.vertices[k] += moved->vectors[k].vector;
   }
   out.compensation = std::move(comp).value();
-  return std::nullopt;
+  return FieldCoverage{field.coverage, field.model_points, to_string(field.method)};
 }
 
 }  // namespace
@@ -262,14 +256,18 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   PointCloud scan_in_cad = transformed(scan, fit->T_cad_scan);
   auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
   if (!deviation) return fail(deviation.message());
-  to_proto(*deviation, config->deviation, report.mutable_deviation());
+  // deviation.ply's colour scale: the setting, else the surface tolerance it is judged by.
+  const double color_scale_mm = config->deviation.color_scale_mm > 0.0
+                                    ? config->deviation.color_scale_mm
+                                    : config->verdict.tolerance_mm;
+  to_proto(*deviation, color_scale_mm, report.mutable_deviation());
   // The fit's health figure: the distance of the scan to the surface after the fit, trimmed
   // like ICP's pairs. rms_final (to the nearest model sample) grows with the sample spacing,
   // and on a thick sheet the nearest sample may lie on the other side.
-  report.mutable_global_fit()->set_rms_residual(
-      trimmed_rms(deviation->signed_distance_mm, config->global_fit.icp.trimmed_fraction));
-  out.deviation_cloud =
-      deviation_cloud(std::move(scan_in_cad), *deviation, report.deviation().color_scale_mm());
+  const double fit_rms_residual_mm =
+      trimmed_rms(deviation->signed_distance_mm, config->global_fit.icp.trimmed_fraction);
+  report.mutable_global_fit()->set_rms_residual(fit_rms_residual_mm);
+  out.deviation_cloud = deviation_cloud(std::move(scan_in_cad), *deviation, color_scale_mm);
   timings.set_deviation(ms_since(t));
 
   t = Clock::now();
@@ -279,14 +277,21 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
-  if (auto error =
-          add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud.points,
-                          springback ? &*springback : nullptr, *config, out))
-    return *error;
+  auto coverage =
+      add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud.points,
+                      springback ? &*springback : nullptr, *config, out);
+  if (!coverage) return coverage.error();
   timings.set_deformation(ms_since(t));
 
-  // 9. Verdict: deviation and springback against the tolerances, analysis health.
-  *report.mutable_verdict() = decide_verdict(report, config->verdict);
+  // 9. Verdict from the stage results: deviation and springback against the tolerances,
+  // analysis health; the report copies its decisions, the per-bend pass included.
+  const VerdictResult verdict =
+      decide_verdict({deviation->statistics, deviation->signed_distance_mm,
+                      springback ? springback->bends : std::vector<BendMeasurement>{},
+                      std::move(*coverage), fit_rms_residual_mm, fit->ambiguous,
+                      fit->orientation.ambiguity},
+                     config->verdict);
+  to_proto(verdict, &report);
 
   timings.set_total(ms_since(start));
   return out;

@@ -15,72 +15,85 @@ std::string fixed2(double x) {
   return buffer;
 }
 
-void check_surface(const v1::InspectionReport& r, const VerdictSettings& s, v1::Verdict& out) {
-  const v1::Deviation& d = r.deviation();
-  if (d.points() <= 0) {
-    out.add_reasons("no surface deviation was computed (0 scan points compared)");
+// Share of |d| beyond the limit; a fixed serial order, so the figure is reproducible.
+double fraction_beyond(std::span<const double> d, double limit) {
+  if (d.empty()) return 0.0;
+  const auto out =
+      std::count_if(d.begin(), d.end(), [limit](double v) { return std::abs(v) > limit; });
+  return static_cast<double>(out) / static_cast<double>(d.size());
+}
+
+void check_surface(const VerdictInput& in, const VerdictSettings& s, VerdictResult& out) {
+  out.tolerance_mm = s.tolerance_mm;
+  out.fraction_out_of_tolerance = fraction_beyond(in.signed_distance_mm, s.tolerance_mm);
+  const DeviationStatistics& d = in.deviation;
+  if (d.points == 0) {
+    out.reasons.push_back("no surface deviation was computed (0 scan points compared)");
     return;
   }
   const bool p95 = s.deviation_statistic == DeviationStatistic::kP95;
-  const double value = p95 ? d.p95() : std::max(std::abs(d.min()), std::abs(d.max()));
+  const double value = p95 ? d.p95_mm : std::max(std::abs(d.min_mm), std::abs(d.max_mm));
   // NaN fails too: a statistic that cannot be compared is not a pass.
   if (!(value <= s.tolerance_mm)) {
-    out.add_reasons(std::string(p95 ? "p95" : "max") + " |deviation| " + fixed2(value) +
-                    " mm > tolerance " + fixed2(s.tolerance_mm) + " mm");
+    out.reasons.push_back(std::string(p95 ? "p95" : "max") + " |deviation| " + fixed2(value) +
+                          " mm > tolerance " + fixed2(s.tolerance_mm) + " mm");
   }
 }
 
-void check_bends(const v1::InspectionReport& r, const VerdictSettings& s, v1::Verdict& out) {
-  for (const v1::Bend& bend : r.bends()) {
-    const std::string name = "bend " + std::to_string(bend.id());
-    if (!bend.measured()) {
+void check_bends(const VerdictInput& in, const VerdictSettings& s, VerdictResult& out) {
+  for (const BendMeasurement& bend : in.bends) {
+    const auto own = s.angle_tolerance_deg_by_bend.find(bend.bend_id);
+    const double tolerance =
+        own != s.angle_tolerance_deg_by_bend.end() ? own->second : s.angle_tolerance_deg;
+    // The one place a bend passes: the report and the PLC's bend flags copy this.
+    const bool pass = bend.measured && std::abs(bend.springback_deg) <= tolerance;
+    out.bends.push_back({bend.bend_id, tolerance, pass});
+    const std::string name = "bend " + std::to_string(bend.bend_id);
+    if (!bend.measured) {
       if (s.fail_unmeasured_bends) {
-        out.add_reasons(name + " not measured (a flange had too few scan points)");
+        out.reasons.push_back(name + " not measured (a flange had too few scan points)");
       }
       continue;
     }
-    const double tolerance =
-        bend.angle_tolerance_deg() > 0.0 ? bend.angle_tolerance_deg() : s.angle_tolerance_deg;
-    if (!(std::abs(bend.springback_deg()) <= tolerance)) {
-      out.add_reasons(name + " springback " + fixed2(bend.springback_deg()) + " deg (nominal " +
-                      fixed2(bend.nominal_angle_deg()) + ", measured " +
-                      fixed2(bend.measured_angle_deg()) + ") exceeds tolerance " +
-                      fixed2(tolerance) + " deg");
+    if (!pass) {
+      out.reasons.push_back(name + " springback " + fixed2(bend.springback_deg) + " deg (nominal " +
+                            fixed2(bend.nominal_angle_deg) + ", measured " +
+                            fixed2(bend.measured_angle_deg) + ") exceeds tolerance " +
+                            fixed2(tolerance) + " deg");
     }
   }
 }
 
-void check_health(const v1::InspectionReport& r, const VerdictSettings& s, v1::Verdict& out) {
-  const v1::DeformationField& field = r.deformation_field();
-  if (field.model_points() > 0 && !(field.coverage() >= s.min_coverage)) {
-    out.add_reasons("deformation field coverage " + fixed2(field.coverage()) + " < minimum " +
-                    fixed2(s.min_coverage) + " (" + field.method() + ")");
+void check_health(const VerdictInput& in, const VerdictSettings& s, VerdictResult& out) {
+  const FieldCoverage& field = in.field;
+  if (field.model_points > 0 && !(field.coverage >= s.min_coverage)) {
+    out.reasons.push_back("deformation field coverage " + fixed2(field.coverage) + " < minimum " +
+                          fixed2(s.min_coverage) + " (" + field.method + ")");
   }
   // The residual to the surface, not rms_final (to the nearest model sample): the latter grows
   // with the spacing of the samples, so a large, perfectly made part would fail.
-  const double rms = r.global_fit().rms_residual();
+  const double rms = in.fit_rms_residual_mm;
   if (!(rms <= s.max_fit_rms_mm)) {
-    out.add_reasons("global fit residual rms " + fixed2(rms) + " mm > limit " +
-                    fixed2(s.max_fit_rms_mm) + " mm: the analysis cannot be trusted");
+    out.reasons.push_back("global fit residual rms " + fixed2(rms) + " mm > limit " +
+                          fixed2(s.max_fit_rms_mm) + " mm: the analysis cannot be trusted");
   }
   // Two orientations fit within noise: bends may be numbered in reverse, every result may
   // belong to the other orientation.
-  if (r.global_fit().ambiguous()) {
-    out.add_reasons(
-        "ambiguous orientation: two distinct orientations fit within noise (error "
-        "ratio " +
-        fixed2(r.global_fit().orientation_ambiguity()) + "): the analysis cannot be trusted");
+  if (in.orientation_ambiguous) {
+    out.reasons.push_back(
+        "ambiguous orientation: two distinct orientations fit within noise (error ratio " +
+        fixed2(in.orientation_ambiguity) + "): the analysis cannot be trusted");
   }
 }
 
 }  // namespace
 
-v1::Verdict decide_verdict(const v1::InspectionReport& report, const VerdictSettings& settings) {
-  v1::Verdict out;
-  check_surface(report, settings, out);
-  check_bends(report, settings, out);
-  check_health(report, settings, out);
-  out.set_pass(out.reasons_size() == 0);
+VerdictResult decide_verdict(const VerdictInput& input, const VerdictSettings& settings) {
+  VerdictResult out;
+  check_surface(input, settings, out);
+  check_bends(input, settings, out);
+  check_health(input, settings, out);
+  out.pass = out.reasons.empty();
   return out;
 }
 

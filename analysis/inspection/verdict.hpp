@@ -1,22 +1,32 @@
 #pragma once
-// The verdict (DESIGN.md stage 9, issue 6): pass/fail of one inspection from the filled report,
-// with every failing rule in verdict.reasons and its numbers, so the operator and the PLC log
-// see why ("p95 |deviation| 0.84 mm > tolerance 0.50 mm").
+// The verdict (DESIGN.md stage 9, issue 6): pass/fail of one inspection from the stage results,
+// with every failing rule in the reasons and its numbers, so the operator and the PLC log see
+// why ("p95 |deviation| 0.84 mm > tolerance 0.50 mm"). VerdictSettings is the one owner of the
+// tolerances: the deviation and springback stages measure, only the verdict judges, and the
+// report copies its decisions (verdict_proto.hpp), per bend too.
 //
 // Rules (each one that fails adds a reason; the part passes when there is none):
 //   surface   the p95 or the maximum of |signed deviation| (selectable) <= tolerance_mm;
 //             no deviation computed at all fails;
-//   bends     |springback_deg| <= the bend's angle_tolerance_deg when set (> 0), else the
-//             setting; a bend that could not be measured fails when fail_unmeasured_bends;
+//   bends     |springback_deg| <= the bend's limit (angle_tolerance_deg_by_bend, else
+//             angle_tolerance_deg); a bend that could not be measured fails when
+//             fail_unmeasured_bends;
 //   health    the deformation field covers >= min_coverage of the reduced model (when a field
-//             was computed), and the global fit's residual rms to the surface (rms_residual:
-//             the trimmed deviation rms; not rms_final, which grows with the sample spacing) <=
+//             was computed), and the global fit's residual rms to the surface (the trimmed
+//             deviation rms; not rms_final, which grows with the sample spacing) <=
 //             max_fit_rms_mm, and the orientation is not ambiguous (global_fit.ambiguous):
 //             otherwise the numbers above cannot be trusted.
 //
 // Thread safety: pure function.
 
-#include "proto/springscan.pb.h"
+#include <cstddef>
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "analysis/deviation/deviation.hpp"
+#include "analysis/springback/springback.hpp"
 
 namespace springscan::analysis {
 
@@ -28,6 +38,7 @@ enum class DeviationStatistic {
 struct VerdictSettings {
   double tolerance_mm = 0.5;                                          ///< surface deviation limit
   double angle_tolerance_deg = 1.0;                                   ///< springback limit per bend
+  std::map<int, double> angle_tolerance_deg_by_bend{};                ///< bend id -> its own limit
   DeviationStatistic deviation_statistic = DeviationStatistic::kP95;  ///< what is compared
   double min_coverage = 0.9;          ///< least share of the reduced model with a field vector
   double max_fit_rms_mm = 1.0;        ///< largest global fit residual rms (scan to surface)
@@ -35,8 +46,42 @@ struct VerdictSettings {
   bool fail_unmeasured_bends = true;  ///< a bend without a measurement fails the part
 };
 
-/// Decides pass/fail from `report` (deviation, bends, deformation_field, global_fit filled).
-v1::Verdict decide_verdict(const v1::InspectionReport& report,
-                           const VerdictSettings& settings = {});
+/// How much of the reduced model the deformation field covers (matching stage).
+struct FieldCoverage {
+  double coverage = 0.0;         ///< share of the reduced model points with a vector
+  std::size_t model_points = 0;  ///< reduced model points; 0: no field computed (not judged)
+  std::string method{};          ///< to_string(CorrespondenceMethod), for the reason
+};
+
+/// The stage results the verdict is computed from. Borrows `signed_distance_mm` (it must
+/// outlive the call); the rest are copies of small structs.
+struct VerdictInput {
+  DeviationStatistics deviation{};               ///< deviation stage; points 0: none computed
+  std::span<const double> signed_distance_mm{};  ///< deviation stage, for the share out of
+                                                 ///< tolerance; may be empty
+  std::vector<BendMeasurement> bends{};          ///< springback stage, in report order
+  FieldCoverage field{};                         ///< deformation field stage
+  double fit_rms_residual_mm = 0.0;              ///< global fit: trimmed deviation rms, mm
+  bool orientation_ambiguous = false;            ///< global fit: two orientations fit alike
+  double orientation_ambiguity = 0.0;            ///< global fit: their error ratio, for the reason
+};
+
+/// The decision on one bend.
+struct BendVerdict {
+  int bend_id = -1;
+  double angle_tolerance_deg = 0.0;  ///< the limit applied
+  bool pass = false;                 ///< measured and |springback| <= angle_tolerance_deg
+};
+
+struct VerdictResult {
+  bool pass = false;                       ///< no rule failed
+  std::vector<std::string> reasons{};      ///< one per failing rule, with its numbers
+  double tolerance_mm = 0.0;               ///< the surface limit applied
+  double fraction_out_of_tolerance = 0.0;  ///< share of signed_distance_mm with |d| > limit
+  std::vector<BendVerdict> bends{};        ///< one per input bend, in the same order
+};
+
+/// Decides pass/fail from the stage results.
+VerdictResult decide_verdict(const VerdictInput& input, const VerdictSettings& settings = {});
 
 }  // namespace springscan::analysis

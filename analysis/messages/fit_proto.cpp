@@ -26,20 +26,16 @@ void to_proto(const GlobalFitResult& fit, const GlobalFitSettings& settings, v1:
   out->set_orientation_ambiguity(fit.orientation.ambiguity);
 }
 
-void to_proto(const DeviationResult& deviation, const DeviationSettings& settings,
-              v1::Deviation* out) {
+void to_proto(const DeviationResult& deviation, double color_scale_mm, v1::Deviation* out) {
   const DeviationStatistics& s = deviation.statistics;
   out->set_min(s.min_mm);
   out->set_max(s.max_mm);
   out->set_mean(s.mean_mm);
   out->set_rms(s.rms_mm);
   out->set_p95(s.p95_mm);
-  out->set_fraction_out_of_tolerance(s.fraction_out_of_tolerance);
-  out->set_tolerance_mm(s.tolerance_mm);
   out->set_points(static_cast<std::int64_t>(s.points));
   out->set_reference(deviation.exact ? "cad_surface" : "model_points");
-  out->set_color_scale_mm(settings.color_scale_mm > 0.0 ? settings.color_scale_mm
-                                                        : settings.tolerance_mm);
+  out->set_color_scale_mm(color_scale_mm);
 }
 
 void to_proto(const ReductionOutcome& reduction, const ReductionSettings& settings,

@@ -15,9 +15,10 @@ void transform_to_proto(const Transform& T, google::protobuf::RepeatedField<doub
 /// report.global_fit: transform (T_cad_scan), rms at each step, history, stop reason.
 void to_proto(const GlobalFitResult& fit, const GlobalFitSettings& settings, v1::GlobalFit* out);
 
-/// report.deviation: statistics, reference ("cad_surface" or "model_points"), colour scale.
-void to_proto(const DeviationResult& deviation, const DeviationSettings& settings,
-              v1::Deviation* out);
+/// report.deviation: statistics, reference ("cad_surface" or "model_points"), the colour scale
+/// deviation.ply uses. tolerance_mm and fraction_out_of_tolerance are the verdict's
+/// (verdict_proto.hpp).
+void to_proto(const DeviationResult& deviation, double color_scale_mm, v1::Deviation* out);
 
 /// report.reduction: k-center counts and covering radii of model and scan.
 void to_proto(const ReductionOutcome& reduction, const ReductionSettings& settings,

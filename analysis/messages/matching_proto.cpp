@@ -1,4 +1,4 @@
-// Proto conversions of the matching, compensation and verdict stages (matching_proto.hpp).
+// Proto conversions of the matching and compensation stages (matching_proto.hpp).
 #include "analysis/messages/matching_proto.hpp"
 
 #include <cmath>
@@ -93,38 +93,6 @@ Expected<CompensationSettings> from_proto(const v1::CompensationSettings& m) {
   return s;
 }
 
-Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
-  VerdictSettings s;
-  if (m.has_tolerance_mm()) {
-    if (!(m.tolerance_mm() > 0.0)) return bad("verdict.tolerance_mm", m.tolerance_mm(), "> 0");
-    s.tolerance_mm = m.tolerance_mm();
-  }
-  if (m.has_angle_tolerance_deg()) {
-    if (!(m.angle_tolerance_deg() > 0.0)) {
-      return bad("verdict.angle_tolerance_deg", m.angle_tolerance_deg(), "must be > 0");
-    }
-    s.angle_tolerance_deg = m.angle_tolerance_deg();
-  }
-  if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::MAX) {
-    s.deviation_statistic = DeviationStatistic::kMax;
-  } else if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::P95) {
-    s.deviation_statistic = DeviationStatistic::kP95;
-  }
-  if (m.has_min_coverage()) {
-    if (!(m.min_coverage() >= 0.0 && m.min_coverage() <= 1.0)) {
-      return bad("verdict.min_coverage", m.min_coverage(), "0 to 1");
-    }
-    s.min_coverage = m.min_coverage();
-  }
-  if (m.has_max_fit_rms_mm()) {
-    if (!(m.max_fit_rms_mm() > 0.0)) {
-      return bad("verdict.max_fit_rms_mm", m.max_fit_rms_mm(), "must be > 0");
-    }
-    s.max_fit_rms_mm = m.max_fit_rms_mm();
-  }
-  return s;
-}
-
 void to_proto(const DeformationFieldSettings& s, v1::MatchingSettings* m) {
   m->set_method(s.method == CorrespondenceMethod::kNearestNeighbor
                     ? v1::MatchingSettings::NEAREST_NEIGHBOR
@@ -140,16 +108,6 @@ void to_proto(const CompensationSettings& s, v1::CompensationSettings* m) {
   m->set_scale(s.scale);
   m->set_max_magnitude_mm(s.max_magnitude_mm);
   m->set_smoothing_radius_mm(s.smoothing_radius_mm);
-}
-
-void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
-  m->set_tolerance_mm(s.tolerance_mm);
-  m->set_angle_tolerance_deg(s.angle_tolerance_deg);
-  m->set_deviation_statistic(s.deviation_statistic == DeviationStatistic::kMax
-                                 ? v1::VerdictSettings::MAX
-                                 : v1::VerdictSettings::P95);
-  m->set_min_coverage(s.min_coverage);
-  m->set_max_fit_rms_mm(s.max_fit_rms_mm);
 }
 
 void to_proto(const DeformationField& field, v1::DeformationField* m) {

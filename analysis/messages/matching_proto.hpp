@@ -1,10 +1,10 @@
 #pragma once
-// Proto conversions of the deformation-field, compensation and verdict stages (STYLE.md section
-// 2: only *_proto.cpp files convert). Settings start from the C++ defaults and take only the
-// fields the message sets; each value is validated here, once, naming the field.
+// Proto conversions of the deformation-field and compensation stages (STYLE.md section 2: only
+// *_proto.cpp files convert; the verdict's are in verdict_proto.hpp). Settings start from the C++
+// defaults and take only the fields the message sets; each value is validated here, once, naming
+// the field.
 
 #include "analysis/core/expected.hpp"
-#include "analysis/inspection/verdict.hpp"
 #include "analysis/matching/compensation.hpp"
 #include "analysis/matching/deformation_field.hpp"
 #include "proto/springscan.pb.h"
@@ -15,13 +15,10 @@ namespace springscan::analysis {
 Expected<DeformationFieldSettings> from_proto(const v1::MatchingSettings& message);
 /// CompensationSettings overrides -> CompensationSettings.
 Expected<CompensationSettings> from_proto(const v1::CompensationSettings& message);
-/// VerdictSettings overrides -> VerdictSettings.
-Expected<VerdictSettings> from_proto(const v1::VerdictSettings& message);
 
 /// The settings in force, every field set (report.settings).
 void to_proto(const DeformationFieldSettings& settings, v1::MatchingSettings* message);
 void to_proto(const CompensationSettings& settings, v1::CompensationSettings* message);
-void to_proto(const VerdictSettings& settings, v1::VerdictSettings* message);
 
 /// Fills report.deformation_field: method, one Correspondence per vector, coverage (also the
 /// nearest-neighbour one), sizes, total cost and whether the optimality certificate held.

@@ -91,16 +91,6 @@ Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& m) {
   return s;
 }
 
-Expected<DeviationSettings> from_proto(const v1::DeviationSettings& m) {
-  DeviationSettings s;
-  if (m.has_tolerance_mm()) {
-    if (!in_range(m.tolerance_mm(), 1e-9, 1e6))
-      return bad("deviation.tolerance_mm", m.tolerance_mm(), "must be > 0");
-    s.tolerance_mm = m.tolerance_mm();
-  }
-  return s;
-}
-
 Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& m) {
   SpringbackSettings s;
   if (m.has_bend_margin_mm()) {
@@ -153,10 +143,6 @@ void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {
   m->set_min_error_mm(s.icp.min_error_mm);
   m->set_error_ratio_stop(s.icp.error_ratio_stop);
   m->set_pca_initial_alignment(s.pca_initial_alignment);
-}
-
-void to_proto(const DeviationSettings& s, v1::DeviationSettings* m) {
-  m->set_tolerance_mm(s.tolerance_mm);
 }
 
 void to_proto(const SpringbackSettings& s, v1::LocalFitSettings* m) {

@@ -43,10 +43,8 @@ void fill_springback_report(const SpringbackResult& result, v1::InspectionReport
     b.set_segment_a(m.flange_a);
     b.set_segment_b(m.flange_b);
     for (int face : m.face_ids) b.add_cad_faces(face);
-    b.set_angle_tolerance_deg(m.angle_tolerance_deg);
-    b.set_measured(m.measured);
-    b.set_pass(m.pass);
-    if (!m.measured) continue;  // angles stay unset (0) when nothing was measured
+    b.set_measured(m.measured);  // pass and angle_tolerance_deg: the verdict (verdict_proto.hpp)
+    if (!m.measured) continue;   // angles stay unset (0) when nothing was measured
     b.set_measured_angle_deg(m.measured_angle_deg);
     b.set_springback_deg(m.springback_deg);
   }

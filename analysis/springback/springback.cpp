@@ -182,7 +182,7 @@ double wrapped_deg(double a) { return std::remainder(a, 360.0); }
 }  // namespace
 
 BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
-                             const FlangeFit& a, const FlangeFit& b, double tolerance_deg) {
+                             const FlangeFit& a, const FlangeFit& b) {
   BendMeasurement m;
   m.bend_id = bend.id;
   m.flange_a = bend.flange_a;
@@ -191,7 +191,6 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   m.axis_point = bend.axis_point;
   m.radius_mm = bend.radius_mm;
   m.nominal_angle_deg = bend.nominal_angle_deg;
-  m.angle_tolerance_deg = tolerance_deg;
   // Both normals on the concave side of the sheet: the angle between them is the angle the
   // sheet turns.
   const Vec3 na = concave_normal(fa, bend), nb = concave_normal(fb, bend);
@@ -215,7 +214,6 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   m.measured_axis_direction =
       line.dot(m.axis_direction) < 0.0 ? -line.normalized() : line.normalized();
   m.measured = true;
-  m.pass = std::abs(m.springback_deg) <= tolerance_deg;
   return m;
 }
 
@@ -251,8 +249,8 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
   };
   for (const Bend& bend : seg.bends) {
     const std::size_t a = index_of(bend.flange_a), b = index_of(bend.flange_b);
-    result.bends.push_back(measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a],
-                                        result.flanges[b], st.angle_tolerance_deg));
+    result.bends.push_back(
+        measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b]));
   }
   return result;
 }

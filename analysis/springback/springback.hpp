@@ -25,8 +25,6 @@ struct SpringbackSettings {
   LocalFitSettings local_fit;           ///< each flange's local best fit (threads: see below)
   double bend_margin_mm = 2.0;          ///< flange samples this close to a bend are left out
   double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
-  double angle_tolerance_deg = 1.0;     ///< a bend passes when |springback| <= this (the
-                                        ///< pipeline copies verdict.angle_tolerance_deg)
   int min_points_per_flange = 200;      ///< fewer: not fitted, its bends are not measured
   /// The scan is thinned by a fixed stride to at most this many points (0: every point).
   std::int64_t max_scan_points = 100000;
@@ -46,7 +44,8 @@ struct FlangeFit {
   Vec3 measured_normal = Vec3::Zero();  ///< normal of the fitted plane in the CAD frame
 };
 
-/// One bend: nominal geometry from the CAD, measured angle from the local fits.
+/// One bend: nominal geometry from the CAD, measured angle from the local fits. Whether it
+/// passes is the verdict's decision (analysis/inspection/verdict.hpp), against its tolerance.
 struct BendMeasurement {
   int bend_id = -1;
   int flange_a = -1;  ///< Flange::id
@@ -60,10 +59,8 @@ struct BendMeasurement {
   double springback_deg = 0.0;  ///< nominal - measured; > 0: the bend opened up
   AxisAngle relative_rotation;  ///< flange b relative to flange a, CAD frame (paper §4)
   Vec3 measured_axis_direction = Vec3::Zero();  ///< line of the two fitted planes, CAD frame
-  double angle_tolerance_deg = 0.0;
-  bool measured = false;  ///< false when a flange could not be fitted
-  bool pass = false;      ///< measured and |springback| <= tolerance
-  std::string status;     ///< why it was not measured, or empty
+  bool measured = false;                        ///< false when a flange could not be fitted
+  std::string status;                           ///< why it was not measured, or empty
 };
 
 struct SpringbackResult {
@@ -88,7 +85,7 @@ double measured_bend_angle_deg(const Vec3& normal_a, const Vec3& normal_b, const
 /// springback = nominal - measured wrapped into (-180, 180]. A flange not fitted leaves the
 /// bend unmeasured with a status. Pure function.
 BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
-                             const FlangeFit& a, const FlangeFit& b, double tolerance_deg);
+                             const FlangeFit& a, const FlangeFit& b);
 
 /// Measures every bend of `model.segmentation` in `scan_in_cad`. A flange with too few points
 /// (or a failed fit) leaves its bends unmeasured with a status; that is not an error.

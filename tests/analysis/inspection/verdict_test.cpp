@@ -1,4 +1,5 @@
-// The verdict: each rule fails on its own, with its numbers in the reason.
+// The verdict: each rule fails on its own, with its numbers in the reason; it is computed from
+// the stage results and decides the per-bend pass.
 #include "analysis/inspection/verdict.hpp"
 
 #include <gtest/gtest.h>
@@ -9,126 +10,149 @@
 namespace springscan::analysis {
 namespace {
 
-// A report that passes every default rule.
-v1::InspectionReport good_report() {
-  v1::InspectionReport r;
-  auto* d = r.mutable_deviation();
-  d->set_points(1000);
-  d->set_min(-0.31);
-  d->set_max(0.42);
-  d->set_p95(0.28);
-  r.mutable_global_fit()->set_rms_final(0.12);
-  r.mutable_global_fit()->set_rms_residual(0.02);
-  auto* field = r.mutable_deformation_field();
-  field->set_method("min_cost_matching");
-  field->set_model_points(594);
-  field->set_coverage(1.0);
+// Stage results that pass every default rule.
+VerdictInput good_input() {
+  VerdictInput in;
+  in.deviation.points = 1000;
+  in.deviation.min_mm = -0.31;
+  in.deviation.max_mm = 0.42;
+  in.deviation.p95_mm = 0.28;
+  in.fit_rms_residual_mm = 0.02;
+  in.field = {.coverage = 1.0, .model_points = 594, .method = "min_cost_matching"};
   for (int id = 0; id < 2; ++id) {
-    auto* b = r.add_bends();
-    b->set_id(id);
-    b->set_measured(true);
-    b->set_nominal_angle_deg(90.0);
-    b->set_measured_angle_deg(89.6);
-    b->set_springback_deg(0.4);
+    BendMeasurement b;
+    b.bend_id = id;
+    b.measured = true;
+    b.nominal_angle_deg = 90.0;
+    b.measured_angle_deg = 89.6;
+    b.springback_deg = 0.4;
+    in.bends.push_back(b);
   }
-  return r;
+  return in;
 }
 
-bool has_reason(const v1::Verdict& v, const std::string& text) {
-  for (const auto& reason : v.reasons()) {
+bool has_reason(const VerdictResult& v, const std::string& text) {
+  for (const auto& reason : v.reasons) {
     if (reason.find(text) != std::string::npos) return true;
   }
   return false;
 }
 
 TEST(Verdict, GoodPartPasses) {
-  const auto v = decide_verdict(good_report());
-  EXPECT_TRUE(v.pass());
-  EXPECT_EQ(v.reasons_size(), 0);
+  const auto v = decide_verdict(good_input());
+  EXPECT_TRUE(v.pass);
+  EXPECT_EQ(v.reasons.size(), 0u);
+  ASSERT_EQ(v.bends.size(), 2u);
+  EXPECT_TRUE(v.bends[0].pass && v.bends[1].pass);
+  EXPECT_EQ(v.bends[1].bend_id, 1);
+  EXPECT_EQ(v.bends[1].angle_tolerance_deg, 1.0);
 }
 
 TEST(Verdict, SurfaceDeviationByP95OrMax) {
-  auto r = good_report();
-  r.mutable_deviation()->set_p95(0.84);
-  auto v = decide_verdict(r);
-  EXPECT_FALSE(v.pass());
-  ASSERT_EQ(v.reasons_size(), 1);
-  EXPECT_EQ(v.reasons(0), "p95 |deviation| 0.84 mm > tolerance 0.50 mm");
+  auto in = good_input();
+  in.deviation.p95_mm = 0.84;
+  auto v = decide_verdict(in);
+  EXPECT_FALSE(v.pass);
+  ASSERT_EQ(v.reasons.size(), 1u);
+  EXPECT_EQ(v.reasons[0], "p95 |deviation| 0.84 mm > tolerance 0.50 mm");
 
-  r = good_report();  // p95 fine, but one point is 0.61 mm off: only MAX sees it
-  r.mutable_deviation()->set_min(-0.61);
-  EXPECT_TRUE(decide_verdict(r).pass());
-  v = decide_verdict(r, {.deviation_statistic = DeviationStatistic::kMax});
-  EXPECT_FALSE(v.pass());
+  in = good_input();  // p95 fine, but one point is 0.61 mm off: only MAX sees it
+  in.deviation.min_mm = -0.61;
+  EXPECT_TRUE(decide_verdict(in).pass);
+  v = decide_verdict(in, {.deviation_statistic = DeviationStatistic::kMax});
+  EXPECT_FALSE(v.pass);
   EXPECT_TRUE(has_reason(v, "max |deviation| 0.61 mm > tolerance 0.50 mm"));
   EXPECT_TRUE(
-      decide_verdict(r, {.tolerance_mm = 0.7, .deviation_statistic = DeviationStatistic::kMax})
-          .pass());
+      decide_verdict(in, {.tolerance_mm = 0.7, .deviation_statistic = DeviationStatistic::kMax})
+          .pass);
 
-  r = good_report();
-  r.mutable_deviation()->set_points(0);
-  EXPECT_TRUE(has_reason(decide_verdict(r), "no surface deviation"));
-  r = good_report();
-  r.mutable_deviation()->set_p95(std::numeric_limits<double>::quiet_NaN());
-  EXPECT_FALSE(decide_verdict(r).pass());
+  in = good_input();
+  in.deviation.points = 0;
+  EXPECT_TRUE(has_reason(decide_verdict(in), "no surface deviation"));
+  in = good_input();
+  in.deviation.p95_mm = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(decide_verdict(in).pass);
+}
+
+// The share out of tolerance is judged against the verdict's tolerance, the one the report shows.
+TEST(Verdict, FractionOutOfToleranceUsesTheVerdictsTolerance) {
+  auto in = good_input();
+  const std::vector<double> d = {0.1, -0.6, 0.3, 0.55, -0.2, 0.0, 0.7, -0.4};
+  in.signed_distance_mm = d;
+  auto v = decide_verdict(in);
+  EXPECT_EQ(v.tolerance_mm, 0.5);
+  EXPECT_DOUBLE_EQ(v.fraction_out_of_tolerance, 3.0 / 8.0);
+  v = decide_verdict(in, {.tolerance_mm = 0.35});
+  EXPECT_EQ(v.tolerance_mm, 0.35);
+  EXPECT_DOUBLE_EQ(v.fraction_out_of_tolerance, 4.0 / 8.0);
+  in.signed_distance_mm = {};
+  EXPECT_EQ(decide_verdict(in).fraction_out_of_tolerance, 0.0);
 }
 
 TEST(Verdict, SpringbackPerBend) {
-  auto r = good_report();
-  r.mutable_bends(1)->set_springback_deg(-2.31);
-  r.mutable_bends(1)->set_measured_angle_deg(92.31);
-  auto v = decide_verdict(r);
-  ASSERT_EQ(v.reasons_size(), 1);
-  EXPECT_EQ(v.reasons(0),
+  auto in = good_input();
+  in.bends[1].springback_deg = -2.31;
+  in.bends[1].measured_angle_deg = 92.31;
+  auto v = decide_verdict(in);
+  ASSERT_EQ(v.reasons.size(), 1u);
+  EXPECT_EQ(v.reasons[0],
             "bend 1 springback -2.31 deg (nominal 90.00, measured 92.31) exceeds tolerance "
             "1.00 deg");
-  EXPECT_TRUE(decide_verdict(r, {.angle_tolerance_deg = 2.5}).pass());
-  r.mutable_bends(1)->set_angle_tolerance_deg(3.0);  // a per-bend tolerance wins
-  EXPECT_TRUE(decide_verdict(r).pass());
+  EXPECT_TRUE(v.bends[0].pass);
+  EXPECT_FALSE(v.bends[1].pass);
+  EXPECT_TRUE(decide_verdict(in, {.angle_tolerance_deg = 2.5}).pass);
+  // A per-bend tolerance wins.
+  v = decide_verdict(in, {.angle_tolerance_deg_by_bend = {{1, 3.0}}});
+  EXPECT_TRUE(v.pass);
+  EXPECT_EQ(v.bends[1].angle_tolerance_deg, 3.0);
+  EXPECT_EQ(v.bends[0].angle_tolerance_deg, 1.0);
 
-  r = good_report();
-  r.mutable_bends(0)->set_measured(false);
-  v = decide_verdict(r);
+  in = good_input();
+  in.bends[0].measured = false;
+  v = decide_verdict(in);
   EXPECT_TRUE(has_reason(v, "bend 0 not measured"));
-  EXPECT_TRUE(decide_verdict(r, {.fail_unmeasured_bends = false}).pass());
+  EXPECT_FALSE(v.bends[0].pass);  // an unmeasured bend never passes ...
+  v = decide_verdict(in, {.fail_unmeasured_bends = false});
+  EXPECT_TRUE(v.pass);  // ... but need not fail the part
+  EXPECT_FALSE(v.bends[0].pass);
 }
 
 TEST(Verdict, AnalysisHealth) {
-  auto r = good_report();
-  r.mutable_deformation_field()->set_coverage(0.72);
-  r.mutable_global_fit()->set_rms_residual(1.32);
-  const auto v = decide_verdict(r);
-  EXPECT_FALSE(v.pass());
-  ASSERT_EQ(v.reasons_size(), 2);
-  EXPECT_EQ(v.reasons(0), "deformation field coverage 0.72 < minimum 0.90 (min_cost_matching)");
-  EXPECT_EQ(v.reasons(1),
+  auto in = good_input();
+  in.field.coverage = 0.72;
+  in.fit_rms_residual_mm = 1.32;
+  const auto v = decide_verdict(in);
+  EXPECT_FALSE(v.pass);
+  ASSERT_EQ(v.reasons.size(), 2u);
+  EXPECT_EQ(v.reasons[0], "deformation field coverage 0.72 < minimum 0.90 (min_cost_matching)");
+  EXPECT_EQ(v.reasons[1],
             "global fit residual rms 1.32 mm > limit 1.00 mm: the analysis cannot be trusted");
   // No field computed: coverage is not judged.
-  r = good_report();
-  r.mutable_deformation_field()->set_model_points(0);
-  r.mutable_deformation_field()->set_coverage(0.0);
-  EXPECT_TRUE(decide_verdict(r).pass());
+  in = good_input();
+  in.field.model_points = 0;
+  in.field.coverage = 0.0;
+  EXPECT_TRUE(decide_verdict(in).pass);
 }
 
 // The distance to the nearest model sample grows with the part's area (sparser samples); it
-// must not fail a well-fitted part: only the residual to the surface judges the fit.
+// must not fail a well-fitted part: only the residual to the surface judges the fit, and
+// rms_final is not even an input.
 TEST(Verdict, FitHealthIgnoresTheSampleSpacing) {
-  auto r = good_report();
-  r.mutable_global_fit()->set_rms_final(1.37);
-  r.mutable_global_fit()->set_rms_residual(0.03);
-  EXPECT_TRUE(decide_verdict(r).pass());
+  auto in = good_input();
+  in.fit_rms_residual_mm = 0.03;
+  EXPECT_TRUE(decide_verdict(in).pass);
 }
 
 TEST(Verdict, EveryFailingRuleIsListed) {
-  auto r = good_report();
-  r.mutable_deviation()->set_p95(0.9);
-  r.mutable_bends(0)->set_springback_deg(1.5);
-  r.mutable_bends(1)->set_measured(false);
-  r.mutable_global_fit()->set_rms_residual(2.0);
-  r.mutable_deformation_field()->set_coverage(0.5);
-  const auto v = decide_verdict(r);
-  EXPECT_FALSE(v.pass());
-  EXPECT_EQ(v.reasons_size(), 5);
+  auto in = good_input();
+  in.deviation.p95_mm = 0.9;
+  in.bends[0].springback_deg = 1.5;
+  in.bends[1].measured = false;
+  in.fit_rms_residual_mm = 2.0;
+  in.field.coverage = 0.5;
+  const auto v = decide_verdict(in);
+  EXPECT_FALSE(v.pass);
+  EXPECT_EQ(v.reasons.size(), 5u);
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "analysis/messages/verdict_proto.hpp"
+
 namespace springscan::analysis {
 namespace {
 

@@ -3,6 +3,8 @@
 #include <google/protobuf/text_format.h>
 #include <gtest/gtest.h>
 
+#include "analysis/messages/verdict_proto.hpp"
+
 namespace springscan::analysis {
 namespace {
 
@@ -24,7 +26,7 @@ TEST(SettingsProto, UnsetFieldsKeepTheStructDefaults) {
   ASSERT_TRUE(reduction);
   EXPECT_EQ(reduction->kcenter.radius_mm, 10.0);
   EXPECT_EQ(from_proto(m.normals())->k_neighbors, 10);
-  EXPECT_EQ(from_proto(m.deviation())->tolerance_mm, DeviationSettings{}.tolerance_mm);
+  EXPECT_EQ(verdict_settings_from_proto(m)->tolerance_mm, VerdictSettings{}.tolerance_mm);
 }
 
 TEST(SettingsProto, SetFieldsOverride) {
@@ -39,8 +41,8 @@ TEST(SettingsProto, SetFieldsOverride) {
   auto normals = from_proto(m.normals());
   auto reduction = from_proto(m.reduction());
   auto fit = from_proto(m.registration());
-  auto deviation = from_proto(m.deviation());
-  ASSERT_TRUE(normals && reduction && fit && deviation);
+  auto verdict = verdict_settings_from_proto(m);
+  ASSERT_TRUE(normals && reduction && fit && verdict);
   EXPECT_EQ(normals->k_neighbors, 16);
   EXPECT_EQ(normals->radius_mm, 2.5);
   EXPECT_EQ(reduction->kcenter.radius_mm, 7.0);
@@ -56,7 +58,7 @@ TEST(SettingsProto, SetFieldsOverride) {
   EXPECT_EQ(fit->icp.max_correspondence_distance_mm, 4.0);
   EXPECT_EQ(fit->icp.min_error_mm, 0.001);
   EXPECT_FALSE(fit->pca_initial_alignment);
-  EXPECT_EQ(deviation->tolerance_mm, 0.25);
+  EXPECT_EQ(verdict->tolerance_mm, 0.25);  // deviation.tolerance_mm sets the verdict's
   EXPECT_EQ(*threads_from_proto(m), 2);
 }
 
@@ -79,8 +81,30 @@ TEST(SettingsProto, ErrorsNameTheFieldAndValue) {
   EXPECT_NE(k.message().find("normals.k_neighbors"), std::string::npos);
   EXPECT_FALSE(from_proto(parse("reduction { kcenter_radius_mm: -1 }").reduction()));
   EXPECT_FALSE(from_proto(parse("reduction { voxel_size_mm: nan }").reduction()));
-  EXPECT_FALSE(from_proto(parse("deviation { tolerance_mm: 0 }").deviation()));
+  EXPECT_NE(verdict_settings_from_proto(parse("deviation { tolerance_mm: 0 }"))
+                .message()
+                .find("deviation.tolerance_mm = 0"),
+            std::string::npos);
   EXPECT_FALSE(threads_from_proto(parse("threads: -1")));
+}
+
+// The verdict owns the surface tolerance; deviation.tolerance_mm, its older place, sets it only
+// when verdict.tolerance_mm does not, and both go through the same range check.
+TEST(SettingsProto, TheSurfaceToleranceHasOneOwnerAndOneRange) {
+  EXPECT_EQ(verdict_settings_from_proto(
+                parse("deviation { tolerance_mm: 0.2 } verdict { tolerance_mm: 0.3 }"))
+                ->tolerance_mm,
+            0.3);
+  for (const char* text : {"deviation { tolerance_mm: 2e6 }", "verdict { tolerance_mm: 2e6 }",
+                           "verdict { tolerance_mm: nan }"}) {
+    const auto v = verdict_settings_from_proto(parse(text));
+    ASSERT_FALSE(v) << text;
+    EXPECT_NE(v.message().find("(0 < mm <= 1e6)"), std::string::npos) << v.message();
+  }
+  EXPECT_NE(verdict_settings_from_proto(parse("verdict { angle_tolerance_deg: 181 }"))
+                .message()
+                .find("verdict.angle_tolerance_deg = 181"),
+            std::string::npos);
 }
 
 TEST(SettingsProto, RoundTripOfTheSettingsInForce) {

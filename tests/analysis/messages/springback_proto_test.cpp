@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include "analysis/messages/verdict_proto.hpp"
 #include "simulators/parts/sheet_part.hpp"
 
 namespace springscan::analysis {
@@ -16,12 +17,13 @@ TEST(SpringbackProto, ReportHoldsTheBendTableAndSegments) {
   st.point_count = 20000;
   const auto scan = simulate_scan(spec, {1.0, 0.2}, st);
   ASSERT_TRUE(scan.ok());
-  SpringbackSettings settings;
-  settings.angle_tolerance_deg = 0.5;
-  const auto result = measure_springback(*model, *scan, settings);
+  const auto result = measure_springback(*model, *scan);
   ASSERT_TRUE(result.ok());
   v1::InspectionReport report;
   fill_springback_report(*result, report);
+  // The per-bend pass is the verdict's, copied into the report (verdict_proto.hpp).
+  EXPECT_FALSE(report.bends(1).pass());
+  to_proto(decide_verdict({.bends = result->bends}, {.angle_tolerance_deg = 0.5}), &report);
   ASSERT_EQ(report.segments_size(), 3);
   ASSERT_EQ(report.bends_size(), 2);
   EXPECT_EQ(report.segments(1).kind(), "flange");
@@ -35,6 +37,7 @@ TEST(SpringbackProto, ReportHoldsTheBendTableAndSegments) {
   EXPECT_DOUBLE_EQ(b0.nominal_angle_deg(), 80.0);
   EXPECT_FALSE(b0.pass());  // 1 deg of springback against 0.5 deg tolerance
   EXPECT_TRUE(report.bends(1).pass());
+  EXPECT_DOUBLE_EQ(b0.angle_tolerance_deg(), 0.5);
   EXPECT_TRUE(b0.measured());
   EXPECT_EQ(b0.segment_a(), 0);
   EXPECT_EQ(b0.segment_b(), 1);

@@ -89,7 +89,7 @@ void expect_signs(const std::string& name, std::size_t bends_expected) {
       for (int sides = 0; sides < 4; ++sides) {
         const Flange ra = sides & 1 ? other_side(fa) : fa;
         const Flange rb = sides & 2 ? other_side(fb) : fb;
-        const BendMeasurement r = measure_bend(bend, ra, rb, identity, b, 1.0);
+        const BendMeasurement r = measure_bend(bend, ra, rb, identity, b);
         ASSERT_TRUE(r.measured);
         EXPECT_NEAR(r.springback_deg, springback, 1e-6)
             << name << " bend " << bend.id << " nominal " << bend.nominal_angle_deg

@@ -200,7 +200,6 @@ TEST(Springback, FlangesWithTooFewPointsLeaveTheirBendsUnmeasured) {
   EXPECT_TRUE(result->bends[0].measured);
   EXPECT_NEAR(result->bends[0].springback_deg, 0.5, 0.05);
   EXPECT_FALSE(result->bends[1].measured);
-  EXPECT_FALSE(result->bends[1].pass);
   EXPECT_NE(result->bends[1].status.find("flange 2"), std::string::npos) << result->bends[1].status;
   // An empty scan measures nothing and does not fail.
   const auto empty = measure_springback(*model, PointCloud{});

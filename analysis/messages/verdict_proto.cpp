@@ -1,0 +1,97 @@
+// Proto conversions of the verdict (verdict_proto.hpp).
+#include "analysis/messages/verdict_proto.hpp"
+
+#include <cmath>
+#include <optional>
+#include <string>
+
+namespace springscan::analysis {
+namespace {
+
+Error bad(const std::string& field, double value, const std::string& rule) {
+  return fail("settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
+}
+
+// The one range check of each tolerance, wherever the message spells it.
+std::optional<Error> check_tolerance_mm(const std::string& field, double mm) {
+  if (mm > 0.0 && mm <= 1e6) return std::nullopt;  // NaN fails both
+  return bad(field, mm, "0 < mm <= 1e6");
+}
+
+std::optional<Error> check_angle_tolerance_deg(const std::string& field, double deg) {
+  if (deg > 0.0 && deg <= 180.0) return std::nullopt;
+  return bad(field, deg, "0 < deg <= 180");
+}
+
+}  // namespace
+
+Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
+  VerdictSettings s;
+  if (m.has_tolerance_mm()) {
+    if (auto error = check_tolerance_mm("verdict.tolerance_mm", m.tolerance_mm())) return *error;
+    s.tolerance_mm = m.tolerance_mm();
+  }
+  if (m.has_angle_tolerance_deg()) {
+    if (auto error =
+            check_angle_tolerance_deg("verdict.angle_tolerance_deg", m.angle_tolerance_deg()))
+      return *error;
+    s.angle_tolerance_deg = m.angle_tolerance_deg();
+  }
+  if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::MAX) {
+    s.deviation_statistic = DeviationStatistic::kMax;
+  } else if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::P95) {
+    s.deviation_statistic = DeviationStatistic::kP95;
+  }
+  if (m.has_min_coverage()) {
+    if (!(m.min_coverage() >= 0.0 && m.min_coverage() <= 1.0)) {
+      return bad("verdict.min_coverage", m.min_coverage(), "0 to 1");
+    }
+    s.min_coverage = m.min_coverage();
+  }
+  if (m.has_max_fit_rms_mm()) {
+    if (!(m.max_fit_rms_mm() > 0.0)) {
+      return bad("verdict.max_fit_rms_mm", m.max_fit_rms_mm(), "must be > 0");
+    }
+    s.max_fit_rms_mm = m.max_fit_rms_mm();
+  }
+  return s;
+}
+
+Expected<VerdictSettings> verdict_settings_from_proto(const v1::AnalysisSettings& m) {
+  auto s = from_proto(m.verdict());
+  if (!s) return s.error();
+  if (m.deviation().has_tolerance_mm() && !m.verdict().has_tolerance_mm()) {
+    if (auto error = check_tolerance_mm("deviation.tolerance_mm", m.deviation().tolerance_mm()))
+      return *error;
+    s->tolerance_mm = m.deviation().tolerance_mm();
+  }
+  return s;
+}
+
+void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
+  m->set_tolerance_mm(s.tolerance_mm);
+  m->set_angle_tolerance_deg(s.angle_tolerance_deg);
+  m->set_deviation_statistic(s.deviation_statistic == DeviationStatistic::kMax
+                                 ? v1::VerdictSettings::MAX
+                                 : v1::VerdictSettings::P95);
+  m->set_min_coverage(s.min_coverage);
+  m->set_max_fit_rms_mm(s.max_fit_rms_mm);
+}
+
+void to_proto(const VerdictResult& verdict, v1::InspectionReport* report) {
+  v1::Verdict& out = *report->mutable_verdict();
+  out.set_pass(verdict.pass);
+  out.clear_reasons();
+  for (const std::string& reason : verdict.reasons) out.add_reasons(reason);
+  report->mutable_deviation()->set_tolerance_mm(verdict.tolerance_mm);
+  report->mutable_deviation()->set_fraction_out_of_tolerance(verdict.fraction_out_of_tolerance);
+  for (const BendVerdict& decided : verdict.bends) {
+    for (v1::Bend& bend : *report->mutable_bends()) {
+      if (bend.id() != decided.bend_id) continue;
+      bend.set_angle_tolerance_deg(decided.angle_tolerance_deg);
+      bend.set_pass(decided.pass);
+    }
+  }
+}
+
+}  // namespace springscan::analysis
