@@ -59,7 +59,7 @@ analysis::Expected<v1::AnalysisSettings> read_settings(const std::string& path) 
 // The CAD side: import, healing, even samples, segmentation into flanges and bends, and the
 // exact surface distance (analysis/cad/model.hpp).
 analysis::Expected<analysis::PartModel> load_cad_model(const std::string& path,
-                                                       const v1::ModelSettings& m) {
+                                                       const v1::CadModelSettings& m) {
   auto settings = analysis::from_proto(m);
   if (!settings) return settings.error();
   return analysis::load_part_model(path, *settings);
@@ -150,7 +150,7 @@ int analyze_main(int argc, char** argv) {
   if (!scan) return fail_with(kName, scan.message(), kExitUsage);
   const double load_ms = ms_since(start);
   start = Clock::now();
-  auto model = args.has("cad") ? load_cad_model(args.get("cad"), settings.model())
+  auto model = args.has("cad") ? load_cad_model(args.get("cad"), settings.cad_model())
                                : load_point_model(args.get("model"));
   if (!model) return fail_with(kName, model.message(), kExitUsage);
   const double model_ms = ms_since(start);

@@ -33,7 +33,7 @@ class PartModels {
     if (const auto cached = models_.find(part.part_id); cached != models_.end()) {
       return cached->second;
     }
-    auto settings = analysis::from_proto(part.settings.model());
+    auto settings = analysis::from_proto(part.settings.cad_model());
     if (!settings) return settings.error().prepend(kPartModelErrorPrefix);
     auto model = load(part, *settings);
     if (!model) return model.error().prepend(kPartModelErrorPrefix);

@@ -49,8 +49,8 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto normals = from_proto(m.normals());
   auto reduction = from_proto(m.reduction());
   auto fit = from_proto(m.registration());
-  auto springback = from_proto(m.local_fit());
-  auto field = from_proto(m.matching());
+  auto springback = from_proto(m.springback());
+  auto field = from_proto(m.deformation_field());
   auto compensation = from_proto(m.compensation());
   // Every tolerance, the deviation section's tolerance_mm included, is the verdict's.
   auto verdict = verdict_settings_from_proto(m);
@@ -84,8 +84,8 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   // deviation.tolerance_mm is the older spelling of verdict.tolerance_mm: both show the value
   // in force, so a reader of either sees the tolerance the part was judged by.
   out->mutable_deviation()->set_tolerance_mm(s.verdict.tolerance_mm);
-  to_proto(s.springback, out->mutable_local_fit());
-  to_proto(s.field, out->mutable_matching());
+  to_proto(s.springback, out->mutable_springback());
+  to_proto(s.field, out->mutable_deformation_field());
   to_proto(s.compensation, out->mutable_compensation());
   to_proto(s.verdict, out->mutable_verdict());
   out->set_threads(s.threads);

@@ -119,12 +119,12 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message) {
 
 namespace {
 
-// One optional double of ModelSettings onto its C++ field, checked against [lo, hi].
+// One optional double of CadModelSettings onto its C++ field, checked against [lo, hi].
 std::string apply_range(bool present, double value, double lo, double hi, const char* name,
                         double& target) {
   if (!present) return {};
   if (!(value >= lo && value <= hi))
-    return std::string("settings: model.") + name + " = " + std::to_string(value) +
+    return std::string("settings: cad_model.") + name + " = " + std::to_string(value) +
            " (allowed: " + std::to_string(lo) + " to " + std::to_string(hi) + ")";
   target = value;
   return {};
@@ -132,17 +132,18 @@ std::string apply_range(bool present, double value, double lo, double hi, const 
 
 }  // namespace
 
-Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModelSettings settings) {
+Expected<CadModelSettings> from_proto(const v1::CadModelSettings& message,
+                                      CadModelSettings settings) {
   if (message.has_sample_count()) {
     if (message.sample_count() < 100 || message.sample_count() > 10'000'000)
       return fail(ErrorCode::kInvalidSettings,
-                  "settings: model.sample_count = " + std::to_string(message.sample_count()) +
+                  "settings: cad_model.sample_count = " + std::to_string(message.sample_count()) +
                       " (allowed: 100 to 10000000)");
     settings.sampling.sample_count = message.sample_count();
   }
   if (message.has_linear_deflection_mm()) {
     if (!(message.linear_deflection_mm() > 0.0) || !std::isfinite(message.linear_deflection_mm()))
-      return fail(ErrorCode::kInvalidSettings, "settings: model.linear_deflection_mm = " +
+      return fail(ErrorCode::kInvalidSettings, "settings: cad_model.linear_deflection_mm = " +
                                                    std::to_string(message.linear_deflection_mm()) +
                                                    " (must be > 0)");
     settings.import.linear_deflection_mm = message.linear_deflection_mm();
@@ -150,7 +151,7 @@ Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModel
   if (message.has_angular_deflection_deg()) {
     const double value = message.angular_deflection_deg();
     if (!(value > 0.0 && value < 90.0))
-      return fail(ErrorCode::kInvalidSettings, "settings: model.angular_deflection_deg = " +
+      return fail(ErrorCode::kInvalidSettings, "settings: cad_model.angular_deflection_deg = " +
                                                    std::to_string(value) + " (must be in (0, 90))");
     settings.import.angular_deflection_deg = value;
   }
@@ -181,8 +182,8 @@ Expected<CadModelSettings> from_proto(const v1::ModelSettings& message, CadModel
   return settings;
 }
 
-v1::ModelSettings to_proto(const CadModelSettings& s) {
-  v1::ModelSettings m;
+v1::CadModelSettings to_proto(const CadModelSettings& s) {
+  v1::CadModelSettings m;
   m.set_sample_count(s.sampling.sample_count);
   m.set_sample_seed(s.sampling.seed);
   m.set_linear_deflection_mm(s.import.linear_deflection_mm);

@@ -25,15 +25,15 @@ Expected<PartModel> from_proto(const v1::CachedPartModel& message);
 /// The analysis settings' model part (sample count, tessellation) applied over the C++ defaults.
 /// Errors name the field and the value: sample_count 100..10^7 (a settings file must not be
 /// able to size a huge allocation), deflections > 0, angular deflection below 90 degrees.
-Expected<CadModelSettings> from_proto(const v1::ModelSettings& message,
+Expected<CadModelSettings> from_proto(const v1::CadModelSettings& message,
                                       CadModelSettings settings = {});
 
 /// Every value of `settings` that shapes the cached model (import, sampling, segmentation; not
 /// the distance queries, which are rebuilt on load), each field set: what the cache key hashes.
-v1::ModelSettings to_proto(const CadModelSettings& settings);
+v1::CadModelSettings to_proto(const CadModelSettings& settings);
 
 /// The model cache's settings key: the SHA-256 of to_proto(settings) serialized
-/// deterministically, so any setting added to v1::ModelSettings invalidates older entries.
+/// deterministically, so any setting added to v1::CadModelSettings invalidates older entries.
 std::string model_settings_key(const CadModelSettings& settings);
 
 }  // namespace springscan::analysis

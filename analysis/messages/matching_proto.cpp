@@ -33,14 +33,14 @@ void set_correspondence(const DeformationVector& v, bool refined, v1::Correspond
 
 }  // namespace
 
-Expected<DeformationFieldSettings> from_proto(const v1::MatchingSettings& m) {
+Expected<DeformationFieldSettings> from_proto(const v1::DeformationFieldSettings& m) {
   DeformationFieldSettings s;
   if (m.has_method()) {
     switch (m.method()) {
-      case v1::MatchingSettings::NEAREST_NEIGHBOR:
+      case v1::DeformationFieldSettings::NEAREST_NEIGHBOR:
         s.method = CorrespondenceMethod::kNearestNeighbor;
         break;
-      case v1::MatchingSettings::MIN_COST_MATCHING:
+      case v1::DeformationFieldSettings::MIN_COST_MATCHING:
         s.method = CorrespondenceMethod::kMinCostMatching;
         break;
       default:
@@ -49,12 +49,13 @@ Expected<DeformationFieldSettings> from_proto(const v1::MatchingSettings& m) {
   }
   if (m.has_candidate_neighbors()) {
     if (m.candidate_neighbors() < 1 || m.candidate_neighbors() > 1024) {
-      return bad("matching.candidate_neighbors", m.candidate_neighbors(), "1 to 1024");
+      return bad("deformation_field.candidate_neighbors", m.candidate_neighbors(), "1 to 1024");
     }
     s.matching.candidate_neighbors = m.candidate_neighbors();
   }
   if (m.has_dense_limit()) {
-    if (m.dense_limit() < 0) return bad("matching.dense_limit", m.dense_limit(), "must be >= 0");
+    if (m.dense_limit() < 0)
+      return bad("deformation_field.dense_limit", m.dense_limit(), "must be >= 0");
     s.matching.dense_limit = m.dense_limit();
   }
   if (m.has_refine()) s.refinement.enabled = m.refine();
@@ -93,10 +94,10 @@ Expected<CompensationSettings> from_proto(const v1::CompensationSettings& m) {
   return s;
 }
 
-void to_proto(const DeformationFieldSettings& s, v1::MatchingSettings* m) {
+void to_proto(const DeformationFieldSettings& s, v1::DeformationFieldSettings* m) {
   m->set_method(s.method == CorrespondenceMethod::kNearestNeighbor
-                    ? v1::MatchingSettings::NEAREST_NEIGHBOR
-                    : v1::MatchingSettings::MIN_COST_MATCHING);
+                    ? v1::DeformationFieldSettings::NEAREST_NEIGHBOR
+                    : v1::DeformationFieldSettings::MIN_COST_MATCHING);
   m->set_candidate_neighbors(s.matching.candidate_neighbors);
   m->set_dense_limit(s.matching.dense_limit);
   m->set_refine(s.refinement.enabled);

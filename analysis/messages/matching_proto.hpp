@@ -11,13 +11,13 @@
 
 namespace springscan::analysis {
 
-/// MatchingSettings overrides -> DeformationFieldSettings. Errors name the field and value.
-Expected<DeformationFieldSettings> from_proto(const v1::MatchingSettings& message);
+/// deformation_field overrides -> DeformationFieldSettings. Errors name the field and value.
+Expected<DeformationFieldSettings> from_proto(const v1::DeformationFieldSettings& message);
 /// CompensationSettings overrides -> CompensationSettings.
 Expected<CompensationSettings> from_proto(const v1::CompensationSettings& message);
 
 /// The settings in force, every field set (report.settings).
-void to_proto(const DeformationFieldSettings& settings, v1::MatchingSettings* message);
+void to_proto(const DeformationFieldSettings& settings, v1::DeformationFieldSettings* message);
 void to_proto(const CompensationSettings& settings, v1::CompensationSettings* message);
 
 /// Fills report.deformation_field: method, one Correspondence per vector, coverage (also the

@@ -91,11 +91,11 @@ Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& m) {
   return s;
 }
 
-Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& m) {
+Expected<SpringbackSettings> from_proto(const v1::SpringbackSettings& m) {
   SpringbackSettings s;
   if (m.has_bend_margin_mm()) {
     if (!in_range(m.bend_margin_mm(), 0.0, 1000.0))
-      return bad("local_fit.bend_margin_mm", m.bend_margin_mm(), "0 to 1000");
+      return bad("springback.bend_margin_mm", m.bend_margin_mm(), "0 to 1000");
     s.bend_margin_mm = m.bend_margin_mm();
   }
   if (m.has_max_iterations()) s.local_fit.max_iterations = m.max_iterations();
@@ -103,12 +103,12 @@ Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& m) {
     // The same distance assigns scan points to flanges, so 0 (the engine's "no limit") is
     // refused here; the upper bound is the engine's (validate below).
     if (!(m.max_correspondence_distance_mm() > 0.0))
-      return bad("local_fit.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
+      return bad("springback.max_correspondence_distance_mm", m.max_correspondence_distance_mm(),
                  "must be > 0: it is also the flange assignment distance");
     s.local_fit.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
     s.assignment_distance_mm = m.max_correspondence_distance_mm();
   }
-  if (auto error = validate(s.local_fit, "settings: local_fit.")) return *error;
+  if (auto error = validate(s.local_fit, "settings: springback.")) return *error;
   return s;
 }
 
@@ -145,7 +145,7 @@ void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {
   m->set_pca_initial_alignment(s.pca_initial_alignment);
 }
 
-void to_proto(const SpringbackSettings& s, v1::LocalFitSettings* m) {
+void to_proto(const SpringbackSettings& s, v1::SpringbackSettings* m) {
   m->set_bend_margin_mm(s.bend_margin_mm);
   m->set_max_iterations(s.local_fit.max_iterations);
   m->set_max_correspondence_distance_mm(s.local_fit.max_correspondence_distance_mm);

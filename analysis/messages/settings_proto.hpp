@@ -23,11 +23,11 @@ Expected<ReductionSettings> from_proto(const v1::ReductionSettings& message);
 /// robust_kernel, kernel_scale_mm, min_error_mm, error_ratio_stop (0 = off),
 /// pca_initial_alignment; the ranges are validate(IcpSettings)'s (analysis/registration/icp.hpp).
 Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& message);
-/// local_fit.bend_margin_mm (0 to 1000), max_iterations, max_correspondence_distance_mm (> 0;
+/// springback.bend_margin_mm (0 to 1000), max_iterations, max_correspondence_distance_mm (> 0;
 /// also the distance up to which scan points are assigned to flanges); the ranges otherwise
 /// are validate(LocalFitSettings)'s, i.e. the ICP engine's. The deviation section's one field,
 /// tolerance_mm, and every other tolerance belong to the verdict (verdict_proto.hpp).
-Expected<SpringbackSettings> from_proto(const v1::LocalFitSettings& message);
+Expected<SpringbackSettings> from_proto(const v1::SpringbackSettings& message);
 /// threads (0..1024; 0 = all cores).
 Expected<int> threads_from_proto(const v1::AnalysisSettings& message);
 
@@ -35,6 +35,6 @@ Expected<int> threads_from_proto(const v1::AnalysisSettings& message);
 void to_proto(const NormalSettings& settings, v1::NormalSettings* message);
 void to_proto(const ReductionSettings& settings, v1::ReductionSettings* message);
 void to_proto(const GlobalFitSettings& settings, v1::RegistrationSettings* message);
-void to_proto(const SpringbackSettings& settings, v1::LocalFitSettings* message);
+void to_proto(const SpringbackSettings& settings, v1::SpringbackSettings* message);
 
 }  // namespace springscan::analysis

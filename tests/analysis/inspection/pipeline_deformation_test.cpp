@@ -56,7 +56,7 @@ TEST(PipelineDeformation, FieldCompensationAndVerdictAreFilled) {
 TEST(PipelineDeformation, SettingsReachTheStages) {
   const Scenario s = make_setup(81);
   v1::AnalysisSettings settings;
-  settings.mutable_matching()->set_method(v1::MatchingSettings::NEAREST_NEIGHBOR);
+  settings.mutable_deformation_field()->set_method(v1::DeformationFieldSettings::NEAREST_NEIGHBOR);
   settings.mutable_verdict()->set_tolerance_mm(1e-4);  // nothing real is this good
   const auto outcome = run_inspection(s.model, s.scan, settings);
   ASSERT_TRUE(outcome) << outcome.message();

@@ -9,7 +9,7 @@ namespace springscan::analysis {
 namespace {
 
 TEST(MatchingProto, EmptyMessagesKeepTheDefaults) {
-  const auto field = from_proto(v1::MatchingSettings{});
+  const auto field = from_proto(v1::DeformationFieldSettings{});
   const auto comp = from_proto(v1::CompensationSettings{});
   const auto verdict = from_proto(v1::VerdictSettings{});
   ASSERT_TRUE(field.ok() && comp.ok() && verdict.ok());
@@ -24,7 +24,7 @@ TEST(MatchingProto, OverridesRoundTrip) {
   f.method = CorrespondenceMethod::kNearestNeighbor;
   f.matching.candidate_neighbors = 7;
   f.matching.dense_limit = 300;
-  v1::MatchingSettings fm;
+  v1::DeformationFieldSettings fm;
   to_proto(f, &fm);
   const auto f2 = from_proto(fm);
   ASSERT_TRUE(f2.ok());
@@ -54,11 +54,11 @@ TEST(MatchingProto, OverridesRoundTrip) {
 }
 
 TEST(MatchingProto, BadValuesNameTheField) {
-  v1::MatchingSettings fm;
+  v1::DeformationFieldSettings fm;
   fm.set_candidate_neighbors(0);
   const auto f = from_proto(fm);
   ASSERT_FALSE(f.ok());
-  EXPECT_NE(f.message().find("matching.candidate_neighbors"), std::string::npos);
+  EXPECT_NE(f.message().find("deformation_field.candidate_neighbors"), std::string::npos);
   v1::CompensationSettings cm;
   cm.set_max_magnitude_mm(-1.0);
   EXPECT_NE(from_proto(cm).message().find("compensation.max_magnitude_mm"), std::string::npos);

@@ -27,7 +27,7 @@ TEST(SpringbackPipeline, ReportHoldsTheMeasuredBendTable) {
   ASSERT_TRUE(scan.ok());
   v1::AnalysisSettings settings;
   settings.mutable_verdict()->set_angle_tolerance_deg(2.0);
-  settings.mutable_local_fit()->set_bend_margin_mm(2.5);
+  settings.mutable_springback()->set_bend_margin_mm(2.5);
   const auto outcome = run_inspection(*model, *scan, settings);
   ASSERT_TRUE(outcome.ok()) << outcome.message();
   const v1::InspectionReport& report = outcome->report;
@@ -41,8 +41,8 @@ TEST(SpringbackPipeline, ReportHoldsTheMeasuredBendTable) {
   EXPECT_TRUE(bend.pass());
   EXPECT_GT(report.segments(0).points(), 1000);
   EXPECT_GT(report.timings_ms().local_fits(), 0.0);
-  EXPECT_DOUBLE_EQ(report.settings().local_fit().bend_margin_mm(), 2.5);
-  EXPECT_GT(report.settings().local_fit().max_iterations(), 0);
+  EXPECT_DOUBLE_EQ(report.settings().springback().bend_margin_mm(), 2.5);
+  EXPECT_GT(report.settings().springback().max_iterations(), 0);
 }
 
 TEST(SpringbackPipeline, BadLocalFitSettingsNameTheField) {
@@ -51,10 +51,10 @@ TEST(SpringbackPipeline, BadLocalFitSettingsNameTheField) {
   const auto scan = simulate_scan(l_profile(40, 30, 90, 3), {0.0}, {});
   ASSERT_TRUE(scan.ok());
   v1::AnalysisSettings settings;
-  settings.mutable_local_fit()->set_max_correspondence_distance_mm(-1.0);
+  settings.mutable_springback()->set_max_correspondence_distance_mm(-1.0);
   const auto outcome = run_inspection(*model, *scan, settings);
   ASSERT_FALSE(outcome.ok());
-  EXPECT_NE(outcome.message().find("local_fit.max_correspondence_distance_mm"), std::string::npos);
+  EXPECT_NE(outcome.message().find("springback.max_correspondence_distance_mm"), std::string::npos);
 }
 
 }  // namespace
