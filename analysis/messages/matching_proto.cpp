@@ -61,12 +61,12 @@ Expected<DeformationFieldSettings> from_proto(const v1::DeformationFieldSettings
   if (m.has_refine()) s.refinement.enabled = m.refine();
   if (m.has_support_radius_mm()) {
     if (!(m.support_radius_mm() > 0.0 && m.support_radius_mm() <= 50.0))
-      return bad("matching.support_radius_mm", m.support_radius_mm(), "0 to 50");
+      return bad("deformation_field.support_radius_mm", m.support_radius_mm(), "0 to 50");
     s.refinement.support_radius_mm = m.support_radius_mm();
   }
   if (m.has_normal_window_mm()) {
     if (!(m.normal_window_mm() > 0.0 && m.normal_window_mm() <= 50.0))
-      return bad("matching.normal_window_mm", m.normal_window_mm(), "0 to 50");
+      return bad("deformation_field.normal_window_mm", m.normal_window_mm(), "0 to 50");
     s.refinement.normal_window_mm = m.normal_window_mm();
   }
   return s;

@@ -154,7 +154,7 @@ TEST_P(FieldAccuracy, ContrastTable) {
   sc.springback_deg = c.springback_deg;
   sc.pose = random_pose(100u + static_cast<unsigned>(GetParam()));
   v1::AnalysisSettings nn;
-  nn.mutable_matching()->set_method(v1::MatchingSettings::NEAREST_NEIGHBOR);
+  nn.mutable_deformation_field()->set_method(v1::DeformationFieldSettings::NEAREST_NEIGHBOR);
   const FieldRun a = testing::run_field_case(cad_of(c), sc, nn);
   const FieldRun b = testing::run_field_case(cad_of(c), sc);
   const auto e_nn = field_errors(a, a.report.deformation_field().matching());
