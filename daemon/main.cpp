@@ -64,7 +64,7 @@ bool check_part_models(const std::vector<springscan::daemon::PartEntry>& parts,
   namespace analysis = springscan::analysis;
   for (const auto& part : parts) {
     const std::string name = "part " + std::to_string(part.part_id) + " (" + part.name + ")";
-    auto model_settings = analysis::from_proto(part.settings.model());
+    auto model_settings = analysis::from_proto(part.settings.cad_model());
     auto model = model_settings ? analysis::load_part_model(part.cad_file, *model_settings)
                                 : analysis::Expected<analysis::PartModel>(model_settings.error());
     if (!model) {

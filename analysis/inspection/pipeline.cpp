@@ -300,7 +300,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 Expected<bool> check_analysis_settings(const v1::AnalysisSettings& settings) {
   auto stages = load_settings(settings);
   if (!stages) return stages.error();
-  auto model = from_proto(settings.model());
+  auto model = from_proto(settings.cad_model());
   if (!model) return model.error();
   return true;
 }
