@@ -9,7 +9,8 @@ namespace springscan::analysis {
 namespace {
 
 Error bad(const std::string& field, double value, const std::string& rule) {
-  return fail("settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
+  return fail(ErrorCode::kInvalidSettings,
+              "settings: " + field + " = " + std::to_string(value) + " (" + rule + ")");
 }
 
 // The one range check of each tolerance, wherever the message spells it.
