@@ -1,4 +1,4 @@
-// The deformation field and the compensation for a 1M-point scan (issue 17; budget 100 ms on
+// The deformation field and the compensation for a 1M-point scan (budget 100 ms on
 // 2 cores, docs/performance.md "Deformation field"): the raw min-cost matching of the k-center
 // reductions, its refinement (flange motions and the scan's local surface) and the
 // compensation at the control points. Inputs (reduction, springback stage) are built once.

@@ -1,5 +1,5 @@
 // Figures program (not a test): how often the global fit picks the right orientation of a
-// near-symmetric part (issue 16). Trials cycle over hats whose last brim is longer by 3, 4 or
+// near-symmetric part. Trials cycle over hats whose last brim is longer by 3, 4 or
 // 5 mm (8,000-point scans) and two openamr parts laser-scanned from one side (15,000 points),
 // all with sigma = 0.02 mm noise, under poses near a half turn about each part axis (off by up
 // to 10 degrees, up to 200 mm away). A trial is right when the fit ends within 1 degree of the

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Open3D reference for bench_registration (issue 3): the same model.ply / scan.ply through
+"""Open3D reference for bench_registration: the same model.ply / scan.ply through
 Open3D's voxel_down_sample, registration_icp (point-to-plane) and compute_point_cloud_distance.
 
     SPRINGSCAN_BENCH_DATA_DIR=/tmp/fitbench ./build/bench/bench_registration   # writes the data

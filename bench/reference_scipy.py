@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The same matching instances through scipy.optimize.linear_sum_assignment (issue 6).
+"""The same matching instances through scipy.optimize.linear_sum_assignment.
 
 Runs `bench_matching --export=DIR` (our solver: writes the instances, our total costs and
 median wall and process CPU times), then solves every instance with scipy on the dense squared

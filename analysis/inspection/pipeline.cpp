@@ -91,7 +91,8 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   out->set_threads(s.threads);
 }
 
-// Refuses what no fit can use; warns about what makes a fit doubtful (issue 3 "Bad input").
+// Refuses what no fit can use (an error); warns about what makes a fit doubtful (a report
+// warning, the analysis goes on).
 std::optional<Error> check_inputs(const PartModel& model, const PointCloud& scan,
                                   v1::InspectionReport& report) {
   if (scan.empty()) return fail("scan: no points");
@@ -285,12 +286,11 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   // 9. Verdict from the stage results: deviation and springback against the tolerances,
   // analysis health; the report copies its decisions, the per-bend pass included.
-  const VerdictResult verdict =
-      decide_verdict({deviation->statistics, deviation->signed_distance_mm,
-                      springback ? springback->bends : std::vector<BendMeasurement>{},
-                      std::move(*coverage), fit_rms_residual_mm, fit->ambiguous,
-                      fit->orientation.ambiguity},
-                     config->verdict);
+  const VerdictResult verdict = decide_verdict(
+      {deviation->statistics, deviation->signed_distance_mm,
+       springback ? springback->bends : std::vector<BendMeasurement>{}, std::move(*coverage),
+       fit_rms_residual_mm, fit->ambiguous, fit->orientation.ambiguity},
+      config->verdict);
   to_proto(verdict, &report);
 
   timings.set_total(ms_since(start));

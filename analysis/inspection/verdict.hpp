@@ -1,5 +1,5 @@
 #pragma once
-// The verdict (DESIGN.md stage 9, issue 6): pass/fail of one inspection from the stage results,
+// The verdict (DESIGN.md stage 9): pass/fail of one inspection from the stage results,
 // with every failing rule in the reasons and its numbers, so the operator and the PLC log see
 // why ("p95 |deviation| 0.84 mm > tolerance 0.50 mm"). VerdictSettings is the one owner of the
 // tolerances: the deviation and springback stages measure, only the verdict judges, and the

@@ -1,10 +1,10 @@
 #pragma once
-// The orientation choice of the global fit (issue 16): the PCA search's distinct finalists are
-// each refined on the same scan points against the full model, by the same ICP, and then
-// compared on the same (larger) set of scan points by the same robust error. A surface distance
-// alone cannot see a flange that overhangs the model's end (it lies in the flange's plane), so
-// the error is the distance to the nearest sample's tangent plane plus how far the point lies
-// beyond the sample spacing from that sample, capped so that outliers weigh the same for every
+// The orientation choice of the global fit, for near-symmetric parts: the PCA search's distinct
+// finalists are each refined on the same scan points against the full model, by the same ICP, and
+// then compared on the same (larger) set of scan points by the same robust error. A surface
+// distance alone cannot see a flange that overhangs the model's end (it lies in the flange's
+// plane), so the error is the distance to the nearest sample's tangent plane plus how far the point
+// lies beyond the sample spacing from that sample, capped so that outliers weigh the same for every
 // candidate. Two distinct orientations whose errors are within noise of each other make the
 // part ambiguous, unless the model maps onto itself by the motion between them (a symmetric CAD
 // part: the two are the same answer).

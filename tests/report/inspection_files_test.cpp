@@ -142,7 +142,7 @@ TEST(WriteFileAtomically, ReplacesContentAndCleansUp) {
   fs::remove_all(dir);
 }
 
-// Issue 17: the compensation files a tool designer loads, written with the others.
+// The compensation files a tool designer loads, written with the others.
 TEST(ReportFiles, CompensationFilesAndTheCompensatedSurface) {
   InspectionOutcome outcome = sample_outcome();
   CompensationVector c;

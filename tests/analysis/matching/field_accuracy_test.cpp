@@ -1,4 +1,4 @@
-// The deformation field and the compensation against the constructed truth (issue 17): L, U, Z
+// The deformation field and the compensation against the constructed truth: L, U, Z
 // and hat profiles and two openamr parts, produced with springback 0.2-3 deg, posed at random,
 // laser-scanned in two tilted passes, analysed by run_inspection. The truth of each control
 // point is the produced position of its CAD point in the result frame (field_truth.hpp).

@@ -1,5 +1,5 @@
 #pragma once
-// Ground truth for the deformation field (issue 17): a CAD part produced with known springback
+// Ground truth for the deformation field: a CAD part produced with known springback
 // (simulators/parts), laser-scanned from a pose, analysed end to end; the truth of every model
 // control point is the produced position of its CAD point, carried into the result frame by
 // the report's own best fit (T_cad_scan * T_scan_part). Nothing here reads what the analysis

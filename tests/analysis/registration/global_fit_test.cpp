@@ -122,9 +122,9 @@ TEST(GlobalFit, HalfOfABentProfileIsPlacedWhereItBelongs) {
   }
 }
 
-// Issue 3: sigma = 0.02 mm noise, 2 % outliers, a 200k-point scan (20k under the sanitizers,
-// which run it about 10x slower) from any pose: rotation within 0.01 degrees, translation
-// within 0.01 mm (at 200k), model and scan sampled independently.
+// The accuracy a press shop asks of the fit: sigma = 0.02 mm noise, 2 % outliers, a 200k-point scan
+// (20k under the sanitizers, which run it about 10x slower) from any pose: rotation within 0.01
+// degrees, translation within 0.01 mm (at 200k), model and scan sampled independently.
 TEST(GlobalFit, NoisyScanWithOutliersFromAnyPoseWithinAHundredth) {
 #if defined(__SANITIZE_ADDRESS__)
   // A tenth of the points: the noise averages down sqrt(10) times less, so the bounds widen by

@@ -61,7 +61,8 @@ INSTANTIATE_TEST_SUITE_P(BothMetrics, IcpMethods,
                          ::testing::Values(IcpMethod::kPointToPoint, IcpMethod::kPointToPlane));
 
 TEST(Icp, NoiseAndOutliersWithinAHundredthOfADegreeAndMillimetre) {
-  // Issue 3: sigma = 0.02 mm, 2 % outliers; independent samples of model and scan.
+  // The global fit's accuracy case: sigma = 0.02 mm, 2 % outliers; independent samples of model and
+  // scan.
   const PointCloud model = testing::bumpy_surface(50000, 25);
   PointCloud scan = testing::bumpy_surface(50000, 26);
   testing::add_noise(scan.points, 0.02, 27);

@@ -1,4 +1,4 @@
-// Near-symmetric parts (issue 16): the global fit compares every distinct orientation on the
+// Near-symmetric parts: the global fit compares every distinct orientation on the
 // same points by the same converged robust error, finds the right one of a part whose two
 // orientations differ by a few millimetres of flange, and calls a part ambiguous only when the
 // scan cannot tell two different answers apart.
