@@ -252,30 +252,26 @@ std::string apply_top_level(const v1::DaemonConfig& c, const Locator& at, const 
   return "";
 }
 
-/// The mqtt { } section: on when present (unless enabled: false); files must be readable now,
-/// so that `springscand --check` catches a missing certificate before the service starts.
-std::string apply_mqtt(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
-                       DaemonSettings& out) {
-  MqttSettings& s = out.mqtt;
-  if (s.station.empty()) s.station = out.station.runner.station_name;
-  if (!c.has_mqtt()) return "";
-  const v1::MqttConfig& m = c.mqtt();
-  const auto path = [](const char* field) { return Locator::Path{{"mqtt", -1}, {field, -1}}; };
-  s.enabled = !m.has_enabled() || m.enabled();
+Locator::Path mqtt_path(const char* field) { return Locator::Path{{"mqtt", -1}, {field, -1}}; }
+
+// mqtt { host port keepalive_s retry_max_s client_id }: where the broker is and how to reach it.
+std::string apply_mqtt_connection(const v1::MqttConfig& m, const Locator& at, MqttSettings& s) {
   std::string e;
   if (m.has_host()) {
-    if (m.host().empty()) return at.where(path("host")) + ": is empty";
+    if (m.host().empty()) return at.where(mqtt_path("host")) + ": is empty";
     s.host = m.host();
   }
-  if (m.has_port() && !(e = out_of_range(at, path("port"), m.port(), 1, 65535)).empty()) return e;
+  if (m.has_port() && !(e = out_of_range(at, mqtt_path("port"), m.port(), 1, 65535)).empty()) {
+    return e;
+  }
   if (m.has_port()) s.port = m.port();
   if (m.has_keepalive_s() &&
-      !(e = out_of_range(at, path("keepalive_s"), m.keepalive_s(), 5, 3600)).empty()) {
+      !(e = out_of_range(at, mqtt_path("keepalive_s"), m.keepalive_s(), 5, 3600)).empty()) {
     return e;
   }
   if (m.has_keepalive_s()) s.keepalive_s = m.keepalive_s();
   if (m.has_retry_max_s() &&
-      !(e = out_of_range(at, path("retry_max_s"), m.retry_max_s(), 0.1, 3600.0)).empty()) {
+      !(e = out_of_range(at, mqtt_path("retry_max_s"), m.retry_max_s(), 0.1, 3600.0)).empty()) {
     return e;
   }
   if (m.has_retry_max_s()) {
@@ -283,23 +279,35 @@ std::string apply_mqtt(const v1::DaemonConfig& c, const Locator& at, const std::
     s.retry_initial_s = std::min(s.retry_initial_s, s.retry_max_s);
   }
   if (m.has_client_id()) s.client_id = m.client_id();
-  // Topic levels: no wildcards, and the station is one level.
+  return "";
+}
+
+// mqtt { topic_prefix station }: topic levels, no wildcards, and the station is one level.
+std::string apply_mqtt_topics(const v1::MqttConfig& m, const Locator& at, MqttSettings& s) {
   const auto bad_topic = [](const std::string& text, bool one_level) {
     return text.empty() || text.find_first_of(one_level ? "+#/" : "+#") != std::string::npos ||
            text.front() == '/' || text.back() == '/';
   };
   if (m.has_topic_prefix()) {
     if (bad_topic(m.topic_prefix(), false)) {
-      return at.where(path("topic_prefix")) + ": '" + m.topic_prefix() +
+      return at.where(mqtt_path("topic_prefix")) + ": '" + m.topic_prefix() +
              "' must be non-empty, without + or # and without a leading or trailing /";
     }
     s.topic_prefix = m.topic_prefix();
   }
   if (m.has_station()) s.station = m.station();
   if (bad_topic(s.station, true)) {
-    return (m.has_station() ? at.where(path("station")) : at.where({{"station_name", -1}})) +
+    return (m.has_station() ? at.where(mqtt_path("station")) : at.where({{"station_name", -1}})) +
            ": '" + s.station + "' cannot be a topic level (non-empty, no /, + or #)";
   }
+  return "";
+}
+
+// mqtt { ca_file cert_file key_file username password_file }: readable now, and in pairs that
+// make sense, so that `springscand --check` catches a missing certificate before the service
+// starts.
+std::string apply_mqtt_credentials(const v1::MqttConfig& m, const Locator& at,
+                                   const std::string& file, MqttSettings& s) {
   struct FileField {
     const char* name;
     bool present;
@@ -316,23 +324,37 @@ std::string apply_mqtt(const v1::DaemonConfig& c, const Locator& at, const std::
     const std::string resolved = resolve(f.value, file);
     std::ifstream readable(resolved);
     if (resolved.empty() || !fs::is_regular_file(resolved) || !readable) {
-      return at.where(path(f.name)) + ": '" + f.value + "' is not a readable file" +
+      return at.where(mqtt_path(f.name)) + ": '" + f.value + "' is not a readable file" +
              (resolved != f.value ? " (resolved to " + resolved + ")" : "");
     }
     *f.target = resolved;
   }
   if (s.cert_file.empty() != s.key_file.empty()) {
-    return at.where(path(s.cert_file.empty() ? "key_file" : "cert_file")) +
+    return at.where(mqtt_path(s.cert_file.empty() ? "key_file" : "cert_file")) +
            ": cert_file and key_file go together (a TLS client certificate and its key)";
   }
   if (!s.cert_file.empty() && s.ca_file.empty()) {
-    return at.where(path("cert_file")) + ": a client certificate needs TLS: set ca_file too";
+    return at.where(mqtt_path("cert_file")) + ": a client certificate needs TLS: set ca_file too";
   }
   if (m.has_username()) s.username = m.username();
   if (!s.password_file.empty() && s.username.empty()) {
-    return at.where(path("password_file")) + ": a password needs a username";
+    return at.where(mqtt_path("password_file")) + ": a password needs a username";
   }
   return "";
+}
+
+/// The mqtt { } section: on when present (unless enabled: false).
+std::string apply_mqtt(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
+                       DaemonSettings& out) {
+  MqttSettings& s = out.mqtt;
+  if (s.station.empty()) s.station = out.station.runner.station_name;
+  if (!c.has_mqtt()) return "";
+  const v1::MqttConfig& m = c.mqtt();
+  s.enabled = !m.has_enabled() || m.enabled();
+  std::string e;
+  if (!(e = apply_mqtt_connection(m, at, s)).empty()) return e;
+  if (!(e = apply_mqtt_topics(m, at, s)).empty()) return e;
+  return apply_mqtt_credentials(m, at, file, s);
 }
 
 }  // namespace

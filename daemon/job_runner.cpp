@@ -220,7 +220,7 @@ void JobRunner::run(const RunnerJob& job) {
                std::to_string(static_cast<int>(plc.detail)) + "): " + scan.message() +
                operator_hint(plc.code));
     report.mutable_verdict()->add_reasons("scan failed: " + scan.message());
-    post(finish(job, std::move(report), nullptr, end));
+    post(finish(job, report_only(std::move(report)), end));
     return;
   }
   const auto scanned = Clock::now();
@@ -236,7 +236,7 @@ void JobRunner::run(const RunnerJob& job) {
                "): " + outcome.message() + operator_hint(plc.code));
     report.mutable_verdict()->add_reasons("analysis failed: " + outcome.message());
     report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan->size()));
-    post(finish(job, std::move(report), nullptr, end));
+    post(finish(job, report_only(std::move(report)), end));
     return;
   }
   const bool pass = outcome->report.verdict().pass();
@@ -247,12 +247,13 @@ void JobRunner::run(const RunnerJob& job) {
   std::string verdict = pass ? "PASS" : "FAIL";
   for (const auto& reason : outcome->report.verdict().reasons()) verdict += "; " + reason;
   log_.info(name + ": " + verdict);
-  post(finish(job, std::move(outcome->report), &outcome->deviation_cloud, end));
+  post(finish(job, std::move(*outcome), end));
 }
 
-RunnerEvent JobRunner::finish(const RunnerJob& job, v1::InspectionReport report,
-                              const analysis::PointCloud* cloud, JobEnd end) {
+RunnerEvent JobRunner::finish(const RunnerJob& job, analysis::InspectionOutcome outcome,
+                              JobEnd end) {
   const std::string name = job_name(job);
+  v1::InspectionReport& report = outcome.report;
   report.set_schema("springscan.report.v1");
   if (report.created_utc().empty()) report.set_created_utc(utc_now());
   report.set_station(settings_.station_name);
@@ -264,7 +265,7 @@ RunnerEvent JobRunner::finish(const RunnerJob& job, v1::InspectionReport report,
   report.set_cycle_time_ms(
       std::chrono::duration<double, std::milli>(Clock::now() - job.request.trigger_time).count());
   RunnerEvent event{RunnerEvent::Kind::kFinished, job.record, end, {}, {}};
-  auto stored = store_.persist(job.record, report, cloud);
+  auto stored = store_.persist(job.record, outcome);
   if (!stored) {
     event.end.persisted = false;
     event.end.error_code = regs::ErrorCode::kReportWriteFailed;

@@ -83,8 +83,7 @@ class JobRunner {
   void run(const RunnerJob& job);
   void probe_scanner();
   void post(RunnerEvent event);
-  RunnerEvent finish(const RunnerJob& job, v1::InspectionReport report,
-                     const analysis::PointCloud* cloud, JobEnd end);
+  RunnerEvent finish(const RunnerJob& job, analysis::InspectionOutcome outcome, JobEnd end);
 
   drivers::Scanner& scanner_;
   AnalyzeFn analyze_;

@@ -8,6 +8,8 @@
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -78,77 +80,52 @@ bool check_part_models(const std::vector<springscan::daemon::PartEntry>& parts,
   return true;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  using namespace springscan::daemon;
+// The command line: what to do, or the exit status to return at once (--help, bad usage).
+struct CommandLine {
   std::string config_path;
   bool check_only = false;
+  std::optional<int> exit_now;
+};
+
+CommandLine parse_command_line(int argc, char** argv) {
+  CommandLine cl;
   for (int i = 1; i < argc; ++i) {
     if (std::strcmp(argv[i], "--config") == 0 && i + 1 < argc) {
-      config_path = argv[++i];
+      cl.config_path = argv[++i];
     } else if (std::strcmp(argv[i], "--check") == 0) {
-      check_only = true;
+      cl.check_only = true;
     } else if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0) {
       std::fputs(kUsage, stdout);
-      return 0;
+      cl.exit_now = 0;
+      return cl;
     } else if (std::strcmp(argv[i], "--version") == 0) {
       std::printf("springscand %s\n", SPRINGSCAN_VERSION);
-      return 0;
+      cl.exit_now = 0;
+      return cl;
     } else {
-      return usage(std::string("unknown argument ") + argv[i]);
+      cl.exit_now = usage(std::string("unknown argument ") + argv[i]);
+      return cl;
     }
   }
-  if (config_path.empty()) return usage("--config FILE is required");
-  Log log = Log::to_stderr(LogLevel::kInfo);
-  auto settings = load_daemon_config(config_path);
-  if (!settings) {
-    log.error("invalid config: " + settings.message());
-    return 2;
-  }
-  log.set_level(settings->log_level);
-  if (check_only) {
-    if (!check_part_models(settings->parts, log)) return 2;
-    const MqttSettings& mqtt = settings->mqtt;
-    log.info(config_path + ": config OK" +
-             (mqtt.enabled
-                  ? "; results published to MQTT broker " + mqtt.host + ":" +
-                        std::to_string(mqtt.port) + (mqtt.ca_file.empty() ? "" : " (TLS)") +
-                        " as station " + mqtt.station
-                  : "; MQTT publishing off"));
-    return 0;
-  }
-  const MosquittoLibrary mosquitto_library;
-  install_signal_handlers();
-  // The one way from the config to a driver (drivers/scanner_proto.hpp), calibration included.
-  auto scanner = springscan::drivers::make_scanner(settings->scanner);
-  if (!scanner) {
-    log.error("invalid config: " + scanner.message());
-    return 2;
-  }
-  const bool tactile = settings->scanner.kind() == springscan::v1::ScannerConfig::TACTILE_PROBE;
-  log.info(std::string("scanner: ") + (tactile ? "tactile probe" : "laser line") +
-           (settings->scanner.serial().empty() ? "" : " serial " + settings->scanner.serial()));
-  auto station = Station::create(
-      settings->station, **scanner, make_analysis(settings->parts, settings->model_cache_dir, log),
-      log, [](const std::string& message) { sd_notify(0, message.c_str()); });
-  if (!station) {
-    log.error("cannot start: " + station.message());
-    sd_notify(0, ("STATUS=cannot start: " + station.message()).c_str());
-    return 1;
-  }
-  // Results to the plant: the publisher reads the report store on its own thread.
-  std::unique_ptr<ResultPublisher> publisher;
-  if (settings->mqtt.enabled) {
-    auto started =
-        ResultPublisher::start(settings->mqtt, (*station)->store(), (*station)->boot_id(), log);
-    if (!started) {
-      log.error("cannot start: " + started.message());
-      return 1;
-    }
-    publisher = std::move(*started);
-  }
-  (*station)->run(g_stop);
+  if (cl.config_path.empty()) cl.exit_now = usage("--config FILE is required");
+  return cl;
+}
+
+// --check: the config was valid; every CAD file must load too. Exit status 0 or 2.
+int check_config(const std::string& config_path, const springscan::daemon::DaemonSettings& settings,
+                 springscan::daemon::Log& log) {
+  if (!check_part_models(settings.parts, log)) return 2;
+  const springscan::daemon::MqttSettings& mqtt = settings.mqtt;
+  log.info(config_path + ": config OK" +
+           (mqtt.enabled ? "; results published to MQTT broker " + mqtt.host + ":" +
+                               std::to_string(mqtt.port) + (mqtt.ca_file.empty() ? "" : " (TLS)") +
+                               " as station " + mqtt.station
+                         : "; MQTT publishing off"));
+  return 0;
+}
+
+// After the station stopped: a watchdog bounds the wait for a running analysis (kStopBound).
+void arm_forced_stop(springscan::daemon::Log& log) {
   std::thread([&log] {
     std::this_thread::sleep_for(kStopBound);
     // Non-zero, so systemd (and a technician reading `systemctl status`) can tell a forced
@@ -158,8 +135,62 @@ int main(int argc, char** argv) {
               " s; exiting with status 1 without its result (nothing was reported to the PLC)");
     _exit(1);
   }).detach();
+}
+
+// The service: scanner, station and publisher from the settings, run until SIGTERM.
+int run_station(const springscan::daemon::DaemonSettings& settings, springscan::daemon::Log& log) {
+  using namespace springscan::daemon;
+  const MosquittoLibrary mosquitto_library;
+  install_signal_handlers();
+  // The one way from the config to a driver (drivers/scanner_proto.hpp), calibration included.
+  auto scanner = springscan::drivers::make_scanner(settings.scanner);
+  if (!scanner) {
+    log.error("invalid config: " + scanner.message());
+    return 2;
+  }
+  const bool tactile = settings.scanner.kind() == springscan::v1::ScannerConfig::TACTILE_PROBE;
+  log.info(std::string("scanner: ") + (tactile ? "tactile probe" : "laser line") +
+           (settings.scanner.serial().empty() ? "" : " serial " + settings.scanner.serial()));
+  auto station = Station::create(settings.station, **scanner,
+                                 make_analysis(settings.parts, settings.model_cache_dir, log), log,
+                                 [](const std::string& message) { sd_notify(0, message.c_str()); });
+  if (!station) {
+    log.error("cannot start: " + station.message());
+    sd_notify(0, ("STATUS=cannot start: " + station.message()).c_str());
+    return 1;
+  }
+  // Results to the plant: the publisher reads the report store on its own thread.
+  std::unique_ptr<ResultPublisher> publisher;
+  if (settings.mqtt.enabled) {
+    auto started =
+        ResultPublisher::start(settings.mqtt, (*station)->store(), (*station)->boot_id(), log);
+    if (!started) {
+      log.error("cannot start: " + started.message());
+      return 1;
+    }
+    publisher = std::move(*started);
+  }
+  (*station)->run(g_stop);
+  arm_forced_stop(log);
   publisher.reset();  // "offline" to the broker, the last acknowledged record saved
   station->reset();   // cancels a running scan, waits for the runner
   log.info("springscand stopped");
   return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace springscan::daemon;
+  const CommandLine cl = parse_command_line(argc, argv);
+  if (cl.exit_now) return *cl.exit_now;
+  Log log = Log::to_stderr(LogLevel::kInfo);
+  auto settings = load_daemon_config(cl.config_path);
+  if (!settings) {
+    log.error("invalid config: " + settings.message());
+    return 2;
+  }
+  log.set_level(settings->log_level);
+  if (cl.check_only) return check_config(cl.config_path, *settings, log);
+  return run_station(*settings, log);
 }

@@ -105,8 +105,14 @@ Expected<std::optional<v1::InspectionReport>> ReportStore::load_latest() const {
   return std::optional<v1::InspectionReport>(std::move(report));
 }
 
-Expected<std::string> ReportStore::persist(std::uint64_t record, const v1::InspectionReport& report,
-                                           const analysis::PointCloud* deviation_cloud) {
+analysis::InspectionOutcome report_only(v1::InspectionReport report) {
+  analysis::InspectionOutcome outcome;
+  outcome.report = std::move(report);
+  return outcome;
+}
+
+Expected<std::string> ReportStore::persist(std::uint64_t record,
+                                           const analysis::InspectionOutcome& outcome) {
   const std::string final_path = record_path(record);
   const std::string temp =
       (fs::path(settings_.directory) / (kTempPrefix + fs::path(final_path).filename().string()))
@@ -115,17 +121,14 @@ Expected<std::string> ReportStore::persist(std::uint64_t record, const v1::Inspe
   fs::remove_all(temp, ec);
   if (!fs::create_directory(temp, ec)) return fail("cannot create " + temp + ": " + ec.message());
   // Every file of the record through the one writer `springscan analyze` uses
-  // (report/inspection_files.hpp): report.json, deviation.ply, report.html, report.pb. The
-  // copy costs a few ms per inspection; job_runner hands the report and cloud over separately.
-  analysis::InspectionOutcome outcome{
-      report, deviation_cloud != nullptr ? *deviation_cloud : analysis::PointCloud{}};
+  // (report/inspection_files.hpp).
   auto written = report::write_inspection_files(temp, outcome);
-  if (!written) return fail("record " + std::to_string(record) + ": " + written.message());
+  if (!written) return written.error().prepend("record " + std::to_string(record) + ": ");
   if (::rename(temp.c_str(), final_path.c_str()) != 0) {
     return fail(system_error("cannot rename report into", final_path));
   }
   auto synced = fsync_path(settings_.directory, O_RDONLY | O_DIRECTORY);
-  if (!synced) return fail(synced.message());
+  if (!synced) return synced.error();
   {
     std::lock_guard lock(mutex_);
     last_record_ = std::max(last_record_, record);

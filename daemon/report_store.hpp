@@ -26,6 +26,10 @@ struct ReportStoreSettings {
   int retention = 1000;  ///< newest records kept; older ones are deleted after each persist
 };
 
+/// An outcome with a report and nothing else (a failed scan or analysis): its record has an
+/// empty deviation.ply and no compensation files.
+analysis::InspectionOutcome report_only(v1::InspectionReport report);
+
 class ReportStore {
  public:
   /// Creates the directory if needed, removes interrupted writes, finds the newest record.
@@ -39,11 +43,12 @@ class ReportStore {
   /// The report of the newest complete record, or nullopt when there is none. An unreadable
   /// newest record is an error (the caller then shows "no result").
   analysis::Expected<std::optional<v1::InspectionReport>> load_latest() const;
-  /// Writes record `record` (must be above last_record()) with report::write_inspection_files;
-  /// without `deviation_cloud` (a failed scan) deviation.ply has no vertices. report.html is
-  /// left out when it cannot be drawn. Returns the record's directory.
-  analysis::Expected<std::string> persist(std::uint64_t record, const v1::InspectionReport& report,
-                                          const analysis::PointCloud* deviation_cloud);
+  /// Writes record `record` (must be above last_record()) with report::write_inspection_files,
+  /// the same files `springscan analyze` writes: report.json/.pb, deviation.ply (no vertices for
+  /// a failed scan), report.html (left out when it cannot be drawn), and the compensation files
+  /// when the outcome has them. Returns the record's directory.
+  analysis::Expected<std::string> persist(std::uint64_t record,
+                                          const analysis::InspectionOutcome& outcome);
   /// The directory of record `record`.
   std::string record_path(std::uint64_t record) const;
 

@@ -98,7 +98,7 @@ Expected<std::unique_ptr<ResultPublisher>> ResultPublisher::start(const MqttSett
   if (settings.station.empty()) return fail("mqtt.station: is empty");
   std::unique_ptr<ResultPublisher> publisher(new ResultPublisher(settings, store, boot_id, log));
   auto configured = publisher->configure();
-  if (!configured) return fail(configured.message());
+  if (!configured) return configured.error();
   publisher->thread_ = std::thread([p = publisher.get()] { p->run(); });
   return publisher;
 }
@@ -147,7 +147,7 @@ Expected<bool> ResultPublisher::configure() {
     std::string password;
     if (!settings_.password_file.empty()) {
       auto bytes = analysis::read_file_bytes(settings_.password_file);
-      if (!bytes) return fail("mqtt.password_file: " + bytes.message());
+      if (!bytes) return bytes.error().prepend("mqtt.password_file: ");
       password = bytes->substr(0, bytes->find_first_of("\r\n"));
     }
     rc = mosquitto_username_pw_set(m, settings_.username.c_str(),

@@ -95,12 +95,12 @@ analysis::Expected<std::unique_ptr<Station>> Station::create(const StationSettin
                                                              AnalyzeFn analyze, Log& log,
                                                              NotifyFn notify) {
   auto store = ReportStore::open(settings.reports);
-  if (!store) return analysis::fail(store.message());
+  if (!store) return store.error();
   std::unique_ptr<Station> station(
       new Station(settings, std::move(*store), log, std::move(notify)));
   station->restore_last_result();
   auto server = ModbusServer::open(settings.modbus, station->image_.mapping(), log);
-  if (!server) return analysis::fail(server.message());
+  if (!server) return server.error();
   station->server_ = std::move(*server);
   station->runner_ = std::make_unique<JobRunner>(scanner, std::move(analyze), station->store_, log,
                                                  settings.runner);

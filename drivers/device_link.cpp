@@ -204,6 +204,9 @@ void DeviceLink::resync() {
   consecutive_timeouts_ = 0;
 }
 
+// Some 65 lines on purpose: one loop over the frame types of a running scan
+// (docs/device-protocol.md), each branch a few lines; it reads as the protocol's table of what may
+// arrive during a scan.
 analysis::Expected<ScanOutcome> DeviceLink::scan(p::MessageType data_type,
                                                  const FrameHandler& handler,
                                                  const ScanProgress& progress) {

@@ -80,7 +80,7 @@ Expected<InspectionFiles> write_inspection_files(const std::string& dir,
   const std::string ply_path = join(dir, "deviation.ply");
   auto ply =
       format_deviation_ply(outcome.deviation_cloud, deviation_color_scale_mm(outcome.report));
-  if (!ply) return fail(ply_path + ": " + ply.message());
+  if (!ply) return ply.error().prepend(ply_path + ": ");
   if (auto written = write_file_atomically(ply_path, *ply); !written) return written.error();
 
   // The compensation a tool designer loads: vectors as CSV and PLY, and the CAD tessellation
@@ -98,7 +98,7 @@ Expected<InspectionFiles> write_inspection_files(const std::string& dir,
     surface.cloud.points = outcome.compensated_surface.vertices;
     surface.triangles = outcome.compensated_surface.triangles;
     auto stl = format_stl(surface);
-    if (!stl) return fail("compensated-surface.stl: " + stl.message());
+    if (!stl) return stl.error().prepend("compensated-surface.stl: ");
     if (auto written = write_file_atomically(join(dir, "compensated-surface.stl"), *stl); !written)
       return written.error();
   }

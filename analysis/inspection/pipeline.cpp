@@ -180,7 +180,7 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
   scan_centers.reserve(reduced.scan_centers.size());
   for (const Vec3& p : reduced.scan_centers) scan_centers.push_back(T_cad_scan * p);
   auto raw = deformation_field(reduced.model_centers, scan_centers, s.field);
-  if (!raw) return fail(raw.message());
+  if (!raw) return raw.error();
   std::vector<Vec3> normals;
   std::vector<int> faces;
   control_point_attributes(model, model_tree, reduced.model_centers, normals, faces);
@@ -196,7 +196,7 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
     report.add_warnings("deformation field: the matching's optimality certificate failed: " +
                         field.matching.certificate.failure);
   auto comp = compensation(field, reduced.model_centers, s.compensation);
-  if (!comp) return fail(comp.message());
+  if (!comp) return comp.error();
   append_to_report(*comp, &report);
   if (comp->unsupported > 0)
     report.add_warnings("compensation: " + std::to_string(comp->unsupported) +
@@ -207,7 +207,7 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
   // The compensated surface: every CAD tessellation vertex moved by the interpolated c.
   if (!model.mesh.vertices.empty()) {
     auto moved = compensation(field, model.mesh.vertices, s.compensation);
-    if (!moved) return fail(moved.message());
+    if (!moved) return moved.error();
     out.compensated_surface = model.mesh;
     for (std::size_t k = 0; k < moved->vectors.size(); ++k)
       out.compensated_surface.vertices[k] += moved->vectors[k].vector;
@@ -216,28 +216,37 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
   return FieldCoverage{field.coverage, field.model_points, to_string(field.method)};
 }
 
+// The report's head: schema, the settings in force, what went in.
+void start_report(const PipelineSettings& config, const v1::AnalysisSettings& settings,
+                  const PartModel& model, const PointCloud& scan, v1::InspectionReport& report) {
+  report.set_schema("springscan.report.v1");
+  record_settings(config, settings, report.mutable_settings());
+  v1::InputSummary& input = *report.mutable_input();
+  input.set_scan_points(static_cast<std::int64_t>(scan.size()));
+  input.set_model_points(static_cast<std::int64_t>(model.samples.size()));
+  input.set_cad_faces(model.face_count);
+  input.set_cad_sha256(model.source_sha256);
+}
+
 }  // namespace
 
+// Some 70 lines on purpose: the stages in the paper's order, each a call, its report section
+// and its time; split, the data flow from one stage to the next would no longer read in one place.
 Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
                                            const v1::AnalysisSettings& settings) {
   const auto start = Clock::now();
   auto config = load_settings(settings);
-  if (!config) return fail(config.message());
+  if (!config) return config.error();
   InspectionOutcome out;
   v1::InspectionReport& report = out.report;
-  report.set_schema("springscan.report.v1");
-  record_settings(*config, settings, report.mutable_settings());
-  report.mutable_input()->set_scan_points(static_cast<std::int64_t>(scan.size()));
-  report.mutable_input()->set_model_points(static_cast<std::int64_t>(model.samples.size()));
-  report.mutable_input()->set_cad_faces(model.face_count);
-  report.mutable_input()->set_cad_sha256(model.source_sha256);
+  start_report(*config, settings, model, scan, report);
   if (auto error = check_inputs(model, scan, report)) return *error;
   auto& timings = *report.mutable_timings_ms();
 
   auto t = Clock::now();
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);
-  if (!reduced) return fail(reduced.message());
+  if (!reduced) return reduced.error();
   to_proto(*reduced, config->reduction, model.samples.size(), scan.size(),
            report.mutable_reduction());
   timings.set_reduce(ms_since(t));
@@ -247,7 +256,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   const KdTree model_tree(model.samples.points);
   auto fit = global_fit(reduced->scan_for_fit.points, model_tree, model.samples.normals,
                         config->global_fit);
-  if (!fit) return fail(fit.message());
+  if (!fit) return fit.error();
   to_proto(*fit, config->global_fit, report.mutable_global_fit());
   for (const auto& warning : fit->warnings) report.add_warnings(warning);
   timings.set_global_fit(ms_since(t));
@@ -256,7 +265,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   // 5. Deviation: signed distance of every scan point to the model (DESIGN.md stage 5).
   PointCloud scan_in_cad = transformed(scan, fit->T_cad_scan);
   auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
-  if (!deviation) return fail(deviation.message());
+  if (!deviation) return deviation.error();
   // deviation.ply's colour scale: the setting, else the surface tolerance it is judged by.
   const double color_scale_mm = config->deviation.color_scale_mm > 0.0
                                     ? config->deviation.color_scale_mm

@@ -130,12 +130,9 @@ Transform fit_correction(const std::vector<Vec3>& y, const std::vector<Vec3>& z,
   return G;
 }
 
-}  // namespace
-
-PartMotion part_motion(const PartSegmentation& s, const SpringbackResult& r,
-                       const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
-                       const std::vector<int>& face_ids) {
-  PartMotion out;
+// Fills out.face_flange and out.face_bend (CAD face id -> flange / bend index, -1: neither);
+// returns the number of face ids.
+int index_faces(const PartSegmentation& s, PartMotion& out) {
   int faces = 0;
   for (const Flange& f : s.flanges)
     for (int id : f.face_ids) faces = std::max(faces, id + 1);
@@ -149,6 +146,16 @@ PartMotion part_motion(const PartSegmentation& s, const SpringbackResult& r,
   for (std::size_t k = 0; k < s.bends.size(); ++k)
     for (int id : s.bends[k].face_ids)
       out.face_bend[static_cast<std::size_t>(id)] = static_cast<int>(k);
+  return faces;
+}
+
+}  // namespace
+
+PartMotion part_motion(const PartSegmentation& s, const SpringbackResult& r,
+                       const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                       const std::vector<int>& face_ids) {
+  PartMotion out;
+  const int faces = index_faces(s, out);
 
   // The root: the largest fitted flange.
   out.flange_fitted.assign(s.flanges.size(), false);

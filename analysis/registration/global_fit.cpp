@@ -109,14 +109,14 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
         coarse_model(model_tree, model_normals, settings.pca_model_divisions);
     auto pca = coarse.tree ? pca_align(scan, *coarse.tree, coarse.normals, pca_settings)
                            : pca_align(scan, model_tree, model_normals, pca_settings);
-    if (!pca) return fail("global fit: " + pca.message());
+    if (!pca) return pca.error().prepend("global fit: ");
     result.pca = std::move(*pca);
     result.rms_after_pca_mm =
         rms_nearest_distance(diagnostic, result.pca.T_pca, model_tree, trim, threads);
     // Every distinct finalist refined and scored on the same points against the full model.
     auto choice = choose_orientation(scan, model_tree, model_normals, result.pca.finalist_poses,
                                      orientation_settings(settings), settings.icp, threads);
-    if (!choice) return fail("global fit: " + choice.message());
+    if (!choice) return choice.error().prepend("global fit: ");
     result.orientation = std::move(*choice);
     start = result.orientation.candidates[result.orientation.best].T_cad_scan;
     result.ambiguous = result.orientation.ambiguous;
@@ -131,7 +131,7 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
     result.rms_after_pca_mm = result.rms_initial_mm;
   }
   auto fit = icp(scan, model_tree, model_normals, start, settings.icp);
-  if (!fit) return fail("global fit: " + fit.message());
+  if (!fit) return fit.error().prepend("global fit: ");
   result.icp = std::move(*fit);
   result.T_cad_scan = result.icp.T_target_source;
   result.rms_final_mm = rms_nearest_distance(scan, result.T_cad_scan, model_tree, trim, threads);

@@ -100,6 +100,8 @@ double robust_surface_score(const std::vector<Vec3>& points, const Transform& T,
   return sum / static_cast<double>(points.size());
 }
 
+// Some 65 lines: refine every finalist, score it, then rank and test the runner-up for equivalence;
+// the three steps share the same points and scores, kept together so the comparison reads as fair.
 Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
                                                const KdTree& model_tree,
                                                const std::vector<Vec3>& model_normals,

@@ -199,9 +199,9 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
                                    const std::vector<Vec3>& target_normals,
                                    const PcaAlignSettings& settings) {
   auto source_frame = principal_frame(source);
-  if (!source_frame) return fail("scan " + source_frame.message());
+  if (!source_frame) return source_frame.error().prepend("scan ");
   auto target_frame = principal_frame(target.points());
-  if (!target_frame) return fail("model " + target_frame.message());
+  if (!target_frame) return target_frame.error().prepend("model ");
   const auto rotations =
       pca_rotation_candidates(*source_frame, *target_frame, settings.in_plane_steps);
   const std::vector<Vec3> sample = strided_sample(source, settings.sample_points);

@@ -99,7 +99,7 @@ Expected<LocalFitResult> local_fit(const LocalFitTarget& target, const PointClou
                                    : nearest_point_pairs(target.tree(), model.samples.normals,
                                                          st.max_correspondence_distance_mm);
   auto fit = icp(source, search, Transform::Identity(), icp_settings(st));
-  if (!fit) return fail("local_fit: " + fit.message());
+  if (!fit) return fit.error().prepend("local_fit: ");
   if (fit->stop == IcpStop::kTooFewPairs)
     return fail("local_fit: fewer than " + std::to_string(kMinLocalPairs) + " of " +
                 std::to_string(source.size()) + " points within " +

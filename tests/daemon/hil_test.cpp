@@ -7,6 +7,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "hil_rig.hpp"
@@ -71,6 +73,24 @@ TEST_F(HilTest, GoodPartPassesWithItsSpringbackAndMbpollRunsTheHandshake) {
   EXPECT_TRUE(first.verdict().pass());
   expect_springback(first, testing::kGoodSpringback, 0.1);
   expect_registers_match(cycle->result, first);
+  // The tool designer's files in the record: a row per control point, the supported ones
+  // being the report's compensation vectors (docs/report-format.md).
+  {
+    std::ifstream csv(reports() + "/r000000000001/compensation.csv");
+    ASSERT_TRUE(csv) << "no compensation.csv in the record";
+    std::string line;
+    std::getline(csv, line);  // the header
+    int supported = 0;
+    while (std::getline(csv, line)) {
+      std::stringstream fields(line);
+      std::string field;
+      for (int column = 0; column <= 7; ++column) std::getline(fields, field, ',');
+      supported += field == "1" ? 1 : 0;  // column 7: supported
+    }
+    EXPECT_GT(first.compensation_size(), 0);
+    EXPECT_EQ(supported, first.compensation_size());
+    EXPECT_TRUE(std::filesystem::exists(reports() + "/r000000000001/compensation.ply"));
+  }
 
   // A third-party client runs the next handshake: Debian's mbpoll, one request per call.
   const int port = daemon->port();

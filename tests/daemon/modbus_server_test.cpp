@@ -244,7 +244,8 @@ TEST(ModbusServer, MalformedFramesGetExceptionsOrAClosedConnection) {
     const auto reply2 = raw.receive();
     ASSERT_EQ(reply2.size(), 9u);
     EXPECT_EQ(reply2[8], MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE);
-    raw.send_bytes(frame({0x07}));  // diagnostics short frame (libmodbus issue 837): refused, not parsed
+    raw.send_bytes(
+        frame({0x07}));  // diagnostics short frame (libmodbus issue 837): refused, not parsed
     EXPECT_EQ(raw.receive().at(8), MODBUS_EXCEPTION_ILLEGAL_FUNCTION);
   }
   {

@@ -31,12 +31,22 @@ TEST(ReportStore, PersistsAllFilesAndReloadsTheNewest) {
   analysis::PointCloud cloud;
   cloud.points = {{1, 2, 3}, {4, 5, 6}};
   cloud.scalars = {0.1, -0.2};
-  auto path = store->persist(1, report_with_seq(1), &cloud);
+  analysis::InspectionOutcome outcome = report_only(report_with_seq(1));
+  outcome.deviation_cloud = cloud;
+  analysis::CompensationVector c;
+  c.point = analysis::Vec3(1.0, 2.0, 3.0);
+  c.vector = analysis::Vec3(0.0, 0.0, -0.25);
+  c.supported = true;
+  outcome.compensation.vectors.push_back(c);
+  auto path = store->persist(1, outcome);
   ASSERT_TRUE(path.ok()) << path.message();
-  ASSERT_TRUE(store->persist(2, report_with_seq(2), nullptr).ok());
+  ASSERT_TRUE(store->persist(2, report_only(report_with_seq(2))).ok());
   EXPECT_TRUE(fs::exists(*path + "/report.pb"));
   EXPECT_TRUE(fs::exists(*path + "/report.json"));
   EXPECT_TRUE(fs::exists(*path + "/report.html"));  // report::write_inspection_files writes all
+  // The tool designer's files, as `springscan analyze` writes them (docs/report-format.md).
+  EXPECT_TRUE(fs::exists(*path + "/compensation.csv"));
+  EXPECT_TRUE(fs::exists(*path + "/compensation.ply"));
   const std::string failed_scan = store->record_path(2);
   for (const char* name : {"report.pb", "report.json", "report.html", "deviation.ply"})
     EXPECT_TRUE(fs::exists(failed_scan + "/" + name)) << name;
@@ -68,7 +78,7 @@ TEST(ReportStore, InterruptedWritesAreRemovedAtOpen) {
   TempDir dir("springscan-store-crash");
   {
     auto store = ReportStore::open({dir.str(), 10});
-    ASSERT_TRUE(store->persist(1, report_with_seq(1), nullptr).ok());
+    ASSERT_TRUE(store->persist(1, report_only(report_with_seq(1))).ok());
   }
   // What kill -9 during persist(2) leaves: a temporary directory with a partial file.
   fs::create_directories(dir.str() + "/.tmp-r000000000002");
@@ -84,7 +94,8 @@ TEST(ReportStore, RetentionKeepsTheNewest) {
   TempDir dir("springscan-store-retention");
   auto store = ReportStore::open({dir.str(), 3});
   for (std::uint64_t k = 1; k <= 6; ++k) {
-    ASSERT_TRUE(store->persist(k, report_with_seq(static_cast<std::uint32_t>(k)), nullptr).ok());
+    ASSERT_TRUE(
+        store->persist(k, report_only(report_with_seq(static_cast<std::uint32_t>(k)))).ok());
   }
   int records = 0;
   for (const auto& entry : fs::directory_iterator(dir.str())) {

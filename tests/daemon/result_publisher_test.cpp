@@ -51,7 +51,7 @@ TEST(ResultPublisherTest, BacklogWhileTheBrokerIsDownIsPublishedInOrderWhenItCom
 
   constexpr int kBacklog = 100;
   for (int k = 1; k <= kBacklog; ++k) {
-    ASSERT_TRUE(store->persist(static_cast<std::uint64_t>(k), small_report(k), nullptr).ok());
+    ASSERT_TRUE(store->persist(static_cast<std::uint64_t>(k), report_only(small_report(k))).ok());
   }
   MqttSettings settings;
   settings.port = broker.port();
