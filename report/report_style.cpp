@@ -62,8 +62,11 @@ svg .blabel circle { stroke: #fff; stroke-width: 1.5; }
 svg .blabel.ok circle { fill: var(--pass); } svg .blabel.ng circle { fill: var(--fail); }
 svg .blabel.nm circle { fill: var(--nm); }
 svg .blabel text { fill: #fff; font-weight: 700; font-size: 10.5px; }
-svg line.arrow { stroke: #1d2b53; stroke-width: 1.6; }
-svg circle.anchor { fill: #1d2b53; }
+svg line.arrow { stroke: #111; stroke-width: 1.6; }
+svg line.halo { stroke: #fff; stroke-width: 4; stroke-linecap: round; }
+svg circle.anchor { fill: #111; stroke: #fff; stroke-width: 0.8; }
+svg .key rect { fill: #fff; fill-opacity: 0.85; stroke: #999; }
+svg .key text { font-size: 12px; fill: #111; }
 svg.chart { max-width: 100%; height: auto; }
 svg.colorbar { width: 100%; height: auto; }
 svg.colorbar text { font-size: 13px; }

@@ -2,8 +2,11 @@
 // pictures that decode, and the writer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <regex>
 #include <sstream>
 
@@ -134,6 +137,44 @@ TEST(HtmlReportAlone, PassingReportWithoutCloudSaysThePictureIsMissing) {
   EXPECT_EQ(count_of(*html, "<tr class='bend "), 4u);
   // Compensation arrows still draw, on their own.
   EXPECT_NE(html->find("class='arrow'"), std::string::npos);
+}
+
+// The compensation arrows read against the deviation map: haloed, at a round drawing scale, with
+// a key arrow whose drawn length is to scale. The fixture's vectors lie in the section plane (the
+// view the figure picks), the longest 0.6 * sin(2 pi 14.5 / 60) = 0.599 mm long.
+TEST_F(HtmlReport, CompensationArrowsAreToAStatedRoundScaleWithAKey) {
+  const auto at = html_->find("id='compensation'");
+  ASSERT_NE(at, std::string::npos);
+  const std::string section = html_->substr(at, html_->find("</section>", at) - at);
+  const std::regex line_re(
+      "<line class='(arrow|halo)' x1='([-0-9.]+)' y1='([-0-9.]+)' x2='([-0-9.]+)' "
+      "y2='([-0-9.]+)'");
+  std::vector<double> arrows, halos;
+  for (std::sregex_iterator it(section.begin(), section.end(), line_re), end; it != end; ++it) {
+    const auto& m = *it;
+    const double length =
+        std::hypot(std::stod(m[4]) - std::stod(m[2]), std::stod(m[5]) - std::stod(m[3]));
+    (m[1] == "arrow" ? arrows : halos).push_back(length);
+  }
+  ASSERT_GT(arrows.size(), 10u);
+  EXPECT_EQ(halos, arrows);  // every arrow on its halo
+  // The key is drawn last, in its group, labelled with a round length.
+  const auto key = section.find("<g class='key'>");
+  ASSERT_NE(key, std::string::npos);
+  EXPECT_NE(section.find(">0.2 mm</text>", key), std::string::npos);
+  const double key_px = arrows.back();
+  arrows.pop_back();
+  const double longest_px = *std::max_element(arrows.begin(), arrows.end());
+  EXPECT_NEAR(key_px / longest_px, 0.2 / (0.6 * std::sin(2 * std::numbers::pi * 14.5 / 60)), 0.01);
+  // The drawing scale in the caption is 1, 2 or 5 x 10^k.
+  std::smatch gain;
+  ASSERT_TRUE(std::regex_search(section, gain, std::regex("arrows drawn ([0-9.]+) \u00d7")));
+  const double g = std::stod(gain[1]);
+  const double mantissa = g / std::pow(10.0, std::floor(std::log10(g)));
+  EXPECT_TRUE(std::abs(mantissa - 1) < 1e-9 || std::abs(mantissa - 2) < 1e-9 ||
+              std::abs(mantissa - 5) < 1e-9)
+      << g;
+  EXPECT_NE(section.find("on the deviation map"), std::string::npos);
 }
 
 TEST(HtmlReportAlone, RejectsACloudWithMismatchedAttributes) {
