@@ -77,14 +77,16 @@ analysis::Expected<analysis::PartModel> load_point_model(const std::string& path
 }
 
 // The verdict and the figures a quality engineer looks at first, on stdout.
-void print_summary(const v1::InspectionReport& report, const std::string& out_dir) {
+void print_summary(const v1::InspectionReport& report, const std::string& out_dir,
+                   bool compensation_files) {
   std::printf("verdict: %s\n", report.verdict().pass() ? "PASS" : "FAIL");
   for (const auto& reason : report.verdict().reasons()) std::printf("  - %s\n", reason.c_str());
   std::printf(
-      "global fit: rms %.4f mm after %d iterations; deviation p95 %.4f mm, "
-      "%.1f%% beyond %.3g mm\n",
-      report.global_fit().rms_final(), report.global_fit().iterations(), report.deviation().p95(),
-      100.0 * report.deviation().fraction_out_of_tolerance(), report.deviation().tolerance_mm());
+      "global fit: residual rms %.4f mm to the surface after %d iterations; deviation p95 "
+      "%.4f mm, %.1f%% beyond %.3g mm\n",
+      report.global_fit().rms_residual(), report.global_fit().iterations(),
+      report.deviation().p95(), 100.0 * report.deviation().fraction_out_of_tolerance(),
+      report.deviation().tolerance_mm());
   for (const auto& bend : report.bends()) {
     if (!bend.measured()) {
       std::printf("bend %d: nominal %.2f deg, not measured\n", bend.id(), bend.nominal_angle_deg());
@@ -94,8 +96,10 @@ void print_summary(const v1::InspectionReport& report, const std::string& out_di
                 bend.id(), bend.nominal_angle_deg(), bend.measured_angle_deg(),
                 bend.springback_deg(), bend.pass() ? "ok" : "out of tolerance");
   }
-  std::printf("report: %s/report.html (also report.json, report.pb, deviation.ply); %.0f ms\n",
-              out_dir.c_str(), report.timings_ms().total());
+  std::printf("report: %s/report.html (also report.json, report.pb, deviation.ply%s); %.0f ms\n",
+              out_dir.c_str(),
+              compensation_files ? ", compensation.csv/.ply, compensated-surface.stl" : "",
+              report.timings_ms().total());
 }
 
 }  // namespace
@@ -166,6 +170,7 @@ int analyze_main(int argc, char** argv) {
   timings.set_load(load_ms);
   timings.set_model(model_ms);
   timings.set_total(timings.total() + load_ms + model_ms);
+  report::stamp_report(report);
   for (const auto& warning : report.warnings()) log.warning(warning);
 
   std::error_code ec;
@@ -174,7 +179,8 @@ int analyze_main(int argc, char** argv) {
   auto written = report::write_inspection_files(args.get("out"), *outcome);
   if (!written) return fail_with(kName, written.message(), kExitUsage);
   if (!written->html_error.empty()) log.warning("report.html not written: " + written->html_error);
-  print_summary(report, args.get("out"));
+  if (!args.has("quiet"))
+    print_summary(report, args.get("out"), !outcome->compensation.vectors.empty());
   return kExitOk;
 }
 

@@ -8,18 +8,11 @@
 #include <ctime>
 #include <stdexcept>
 
+#include "report/inspection_files.hpp"
+
 namespace springscan::daemon {
 
 namespace {
-
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return text;
-}
 
 std::string job_name(const RunnerJob& job) {
   return "job " + std::to_string(job.request.job_id) + " part " +
@@ -255,7 +248,7 @@ RunnerEvent JobRunner::finish(const RunnerJob& job, analysis::InspectionOutcome 
   const std::string name = job_name(job);
   v1::InspectionReport& report = outcome.report;
   report.set_schema("springscan.report.v1");
-  if (report.created_utc().empty()) report.set_created_utc(utc_now());
+  report::stamp_report(report);
   report.set_station(settings_.station_name);
   report.set_job_id(job.request.job_id);
   report.set_result_seq(regs::result_seq_from_record(job.record));

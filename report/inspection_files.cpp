@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <filesystem>
 #include <system_error>
 
@@ -114,6 +115,17 @@ Expected<InspectionFiles> write_inspection_files(const std::string& dir,
     return written.error();
   }
   return files;
+}
+
+void stamp_report(v1::InspectionReport& report) {
+  report.set_software_version(SPRINGSCAN_VERSION);
+  if (!report.created_utc().empty()) return;
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  report.set_created_utc(text);
 }
 
 Expected<v1::InspectionReport> read_report_pb(const std::string& path) {

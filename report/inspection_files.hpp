@@ -61,6 +61,11 @@ struct InspectionFiles {
 Expected<InspectionFiles> write_inspection_files(const std::string& dir,
                                                  const InspectionOutcome& outcome);
 
+/// Stamps what the analysis cannot know: software_version (this build's project version) and
+/// created_utc (now, ISO 8601, when still empty). `springscan analyze` and springscand call it
+/// before they write the files, so every report says which build made it and when.
+void stamp_report(v1::InspectionReport& report);
+
 /// Reads a report.pb written by write_inspection_files.
 Expected<v1::InspectionReport> read_report_pb(const std::string& path);
 
