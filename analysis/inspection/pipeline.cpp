@@ -257,8 +257,16 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   auto fit = global_fit(reduced->scan_for_fit.points, model_tree, model.samples.normals,
                         config->global_fit);
   if (!fit) return fit.error();
+  // The part's ends fix what the surface leaves free (registration/boundary.hpp).
+  auto pinned =
+      pin_to_boundary(scan.points, fit->T_cad_scan, model, model_tree, config->global_fit.boundary);
+  if (!pinned) return pinned.error();
+  fit->T_cad_scan = pinned->T_cad_scan;
   to_proto(*fit, config->global_fit, report.mutable_global_fit());
+  to_proto(pinned->free_directions, report.mutable_global_fit());
   for (const auto& warning : fit->warnings) report.add_warnings(warning);
+  for (const FreeDirection& d : pinned->free_directions)
+    if (!d.pinned) report.add_warnings("global fit: a direction is left free, " + d.rule);
   timings.set_global_fit(ms_since(t));
 
   t = Clock::now();

@@ -26,6 +26,21 @@ void to_proto(const GlobalFitResult& fit, const GlobalFitSettings& settings, v1:
   out->set_orientation_ambiguity(fit.orientation.ambiguity);
 }
 
+void to_proto(const std::vector<FreeDirection>& free, v1::GlobalFit* out) {
+  out->clear_free_directions();
+  for (const FreeDirection& d : free) {
+    v1::FreeDirection* m = out->add_free_directions();
+    m->mutable_direction()->set_x(d.direction.x());
+    m->mutable_direction()->set_y(d.direction.y());
+    m->mutable_direction()->set_z(d.direction.z());
+    m->set_pinned(d.pinned);
+    m->set_shift_mm(d.shift_mm);
+    m->set_model_length_mm(d.model_length_mm);
+    m->set_scan_length_mm(d.scan_length_mm);
+    m->set_rule(d.rule);
+  }
+}
+
 void to_proto(const DeviationResult& deviation, double color_scale_mm, v1::Deviation* out) {
   const DeviationStatistics& s = deviation.statistics;
   out->set_min(s.min_mm);

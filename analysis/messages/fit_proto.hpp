@@ -14,6 +14,8 @@ void transform_to_proto(const Transform& T, google::protobuf::RepeatedField<doub
 
 /// report.global_fit: transform (T_cad_scan), rms at each step, history, stop reason.
 void to_proto(const GlobalFitResult& fit, const GlobalFitSettings& settings, v1::GlobalFit* out);
+/// The boundary stage's free directions (replaces out->free_directions).
+void to_proto(const std::vector<FreeDirection>& free, v1::GlobalFit* out);
 
 /// report.deviation: statistics, reference ("cad_surface" or "model_points"), the colour scale
 /// deviation.ply uses. tolerance_mm and fraction_out_of_tolerance are the verdict's

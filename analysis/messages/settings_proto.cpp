@@ -88,6 +88,7 @@ Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& m) {
   GlobalFitSettings s;
   if (auto error = icp_from_proto(m, s.icp)) return *error;
   if (m.has_pca_initial_alignment()) s.pca_initial_alignment = m.pca_initial_alignment();
+  if (m.has_pin_free_directions()) s.boundary.pin_free_directions = m.pin_free_directions();
   return s;
 }
 
@@ -143,6 +144,7 @@ void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {
   m->set_min_error_mm(s.icp.min_error_mm);
   m->set_error_ratio_stop(s.icp.error_ratio_stop);
   m->set_pca_initial_alignment(s.pca_initial_alignment);
+  m->set_pin_free_directions(s.boundary.pin_free_directions);
 }
 
 void to_proto(const SpringbackSettings& s, v1::SpringbackSettings* m) {

@@ -9,6 +9,7 @@
 
 #include "analysis/core/expected.hpp"
 #include "analysis/core/kdtree.hpp"
+#include "analysis/registration/boundary.hpp"
 #include "analysis/registration/icp.hpp"
 #include "analysis/registration/orientation.hpp"
 #include "analysis/registration/pca.hpp"
@@ -26,6 +27,7 @@ struct GlobalFitSettings {
                                         ///< (OrientationChoice::ambiguity), (0, 1]
   OrientationSettings orientation;      ///< the finalists compared on the full model
   IcpSettings icp;                      ///< the final ICP
+  BoundarySettings boundary;            ///< free directions fixed by the part's ends (pipeline)
 };
 
 struct GlobalFitResult {
