@@ -9,6 +9,10 @@
 // all and those answered while the station was ANALYZING; springscand's RSS and open fds
 // over the cycles; its CPU time (user + system) per cycle, next to the wall time, since the
 // machine may be shared.
+//
+//   station_soak --faults [--cycles N] [--seed S] [the scan options]
+// runs the fault campaign instead (fault_campaign.hpp): N cycles (default 1000), each with no
+// fault or a random one, on a small scan; exits non-zero when a failure count is not 0.
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,6 +27,8 @@
 #include <thread>
 #include <vector>
 
+#include "bench/fault_campaign.hpp"
+#include "bench/soak_common.hpp"
 #include "proto/springscan.pb.h"
 #include "simulators/parts/sheet_part.hpp"
 #include "simulators/plc_client.hpp"
@@ -32,6 +38,9 @@
 namespace {
 
 using namespace springscan;
+using bench::percentile;
+using bench::Usage;
+using bench::usage_of;
 namespace fs = std::filesystem;
 namespace regs = daemon::regs;
 using Clock = std::chrono::steady_clock;
@@ -43,43 +52,6 @@ struct Options {
   double scan_s = 1.0;            // the simulated scan's duration (device pacing)
   long surface_points = 1200000;  // dense enough that nearly every bin sees the surface
 };
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
-}
-
-struct Usage {
-  long rss_kb = 0;
-  long fds = 0;
-  double cpu_s = 0.0;  // user + system
-};
-
-Usage usage_of(pid_t pid) {
-  Usage u;
-  const std::string proc = "/proc/" + std::to_string(pid);
-  std::ifstream status(proc + "/status");
-  for (std::string line; std::getline(status, line);) {
-    if (line.rfind("VmRSS:", 0) == 0) u.rss_kb = std::stol(line.substr(6));
-  }
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(proc + "/fd", ec)) {
-    (void)e;
-    ++u.fds;
-  }
-  std::ifstream stat_file(proc + "/stat");
-  std::string stat((std::istreambuf_iterator<char>(stat_file)), {});
-  std::istringstream fields(stat.substr(stat.rfind(')') + 2));  // after "pid (comm) "
-  std::string field;
-  unsigned long utime = 0, stime = 0;
-  for (int i = 3; fields >> field; ++i) {  // fields 14 and 15 of proc(5)
-    if (i == 14) utime = std::stoul(field);
-    if (i == 15) stime = std::stoul(field);
-  }
-  u.cpu_s = static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
-  return u;
-}
 
 /// Response times (ms), split by the station's state in the answer.
 struct PollTimes {
@@ -122,6 +94,21 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
+/// --faults: the campaign's settings, its small-scan defaults overridden by the options given.
+int run_campaign(int argc, char** argv) {
+  bench::CampaignSettings c;
+  for (int i = 1; i + 1 < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--cycles") c.cycles = std::stoi(argv[i + 1]);
+    if (arg == "--seed") c.seed = static_cast<std::uint32_t>(std::stoul(argv[i + 1]));
+    if (arg == "--points-per-profile") c.points_per_profile = std::stoi(argv[i + 1]);
+    if (arg == "--step-mm") c.step_mm = std::stod(argv[i + 1]);
+    if (arg == "--scan-s") c.scan_s = std::stod(argv[i + 1]);
+    if (arg == "--surface-points") c.surface_points = std::stol(argv[i + 1]);
+  }
+  return bench::run_fault_campaign(c);
+}
+
 /// The demo hat as produced (springback 1.5, 0.8, 1.1, 0.4 deg; demo/README.md).
 analysis::Expected<analysis::PointCloud> demo_surface(long points) {
   parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
@@ -135,8 +122,11 @@ analysis::Expected<analysis::PointCloud> demo_surface(long points) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Options o = parse(argc, argv);
   std::signal(SIGPIPE, SIG_IGN);
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--faults") return run_campaign(argc, argv);
+  }
+  const Options o = parse(argc, argv);
   const fs::path dir = fs::temp_directory_path() / ("springscan-soak-" + std::to_string(getpid()));
   fs::create_directories(dir);
   auto surface = demo_surface(o.surface_points);

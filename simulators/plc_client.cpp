@@ -57,6 +57,13 @@ Expected<bool> PlcClient::beat() {
   return true;
 }
 
+Expected<bool> PlcClient::set_heartbeat(bool on) {
+  settings_.send_heartbeat = on;
+  if (!on) return true;
+  last_beat_ = Clock::now() - std::chrono::seconds(1);  // due now
+  return beat();
+}
+
 Expected<StationStatus> PlcClient::read_status() {
   StationStatus status;
   std::uint8_t bits[regs::kDiCount];

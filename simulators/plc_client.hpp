@@ -91,6 +91,10 @@ class PlcClient {
   analysis::Expected<ResultRead> read_result();
   /// Writes CONTROL_WORD (bit i = coil i); the coils themselves are left at 0.
   analysis::Expected<bool> write_control(std::uint16_t word);
+  /// Pauses (a PLC program stopped: heartbeat loss) or resumes PLC_HEARTBEAT while waiting.
+  /// Resuming writes a new value at once, so an ERROR_RESET right after it finds the
+  /// heartbeat running (register map "Reconnecting").
+  analysis::Expected<bool> set_heartbeat(bool on);
   modbus_t* context() { return ctx_; }
 
  private:

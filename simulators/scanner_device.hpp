@@ -63,6 +63,9 @@ class ScannerDevice {
   DeviceEvent take_event();
   /// The endpoint halt of this device cannot be cleared (DeviceFaults::halt_sticks).
   bool halt_sticks() const { return settings_.faults.halt_sticks; }
+  /// Replaces the faults of this device (a fault campaign arms one per scan without a
+  /// replug). Fractions count the frames of the next scan that starts, or of the running one.
+  void arm_faults(const DeviceFaults& faults) { settings_.faults = faults; }
 
   bool scanning() const { return scanning_; }
   std::uint32_t scans_started() const { return scan_id_; }

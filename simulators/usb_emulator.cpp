@@ -180,6 +180,11 @@ void EmulatedUsbScanner::set_faults(const DeviceFaults& faults) {
   impl_->device_settings.faults = faults;
 }
 
+void EmulatedUsbScanner::arm_faults(const DeviceFaults& faults) {
+  std::lock_guard lock(impl_->mutex);
+  if (impl_->device && impl_->plugged) impl_->device->arm_faults(faults);
+}
+
 bool EmulatedUsbScanner::plugged() const {
   std::lock_guard lock(impl_->mutex);
   return impl_->plugged;

@@ -58,6 +58,9 @@ class EmulatedUsbScanner {
   void plug();
   /// Replaces the fault settings for the next plug().
   void set_faults(const DeviceFaults& faults);
+  /// Arms `faults` on the device plugged in now, without a replug (ScannerDevice::arm_faults):
+  /// each fires once, in the next scan. No effect while unplugged; plug() arms set_faults().
+  void arm_faults(const DeviceFaults& faults);
   bool plugged() const;
   /// The testbed root: UMOCKDEV_DIR for a child process.
   std::string root_dir() const;

@@ -3,7 +3,8 @@
 // 0, readiness awaited, stopped by pid). The harness plays systemd: it binds a NOTIFY_SOCKET,
 // waits for READY=1 and reads the bound Modbus port from the MODBUS_PORT= line the daemon
 // sends with it. Optional environment (LD_PRELOAD, UMOCKDEV_DIR) puts the child under the
-// emulated USB scanner.
+// emulated USB scanner; an optional output file takes the child's stdout and stderr (appended,
+// so a supervisor restarting the daemon keeps one log, as the journal would).
 
 #include <signal.h>
 #include <spawn.h>
@@ -12,9 +13,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <fcntl.h>
+
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -27,8 +31,10 @@ namespace springscan::daemon::testing {
 class DaemonProcess {
  public:
   /// Starts `exe --config config` with `extra_env` ("NAME=value") added; waits for READY=1.
+  /// `output_path` (empty: inherited) receives the child's stdout and stderr, appended.
   DaemonProcess(const std::string& exe, const std::string& config, const std::string& work_dir,
-                const std::vector<std::string>& extra_env, double ready_timeout_s = 60.0) {
+                const std::vector<std::string>& extra_env, double ready_timeout_s = 60.0,
+                const std::string& output_path = "") {
     notify_path_ = work_dir + "/notify.sock";
     ::unlink(notify_path_.c_str());
     notify_fd_ = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
@@ -56,9 +62,16 @@ class DaemonProcess {
     envp.push_back(nullptr);
     std::string exe_copy = exe, flag = "--config", config_copy = config;
     char* argv[] = {exe_copy.data(), flag.data(), config_copy.data(), nullptr};
-    if (posix_spawn(&pid_, exe.c_str(), nullptr, nullptr, argv, envp.data()) != 0) {
-      throw std::runtime_error("cannot start " + exe);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    if (!output_path.empty()) {
+      posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, output_path.c_str(),
+                                       O_WRONLY | O_CREAT | O_APPEND, 0644);
+      posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
     }
+    const int spawned = posix_spawn(&pid_, exe.c_str(), &actions, nullptr, argv, envp.data());
+    posix_spawn_file_actions_destroy(&actions);
+    if (spawned != 0) throw std::runtime_error("cannot start " + exe);
     try {
       wait_ready(ready_timeout_s);
     } catch (...) {
@@ -84,11 +97,20 @@ class DaemonProcess {
     return notes_.find(text) != std::string::npos;
   }
   pid_t pid() const { return pid_; }
+  /// The wait status if the child has exited by itself (reaped now; pid() is then -1), else
+  /// nullopt. Never blocks: a supervisor polls it to tell a crash from a running daemon.
+  std::optional<int> exited() {
+    int status = 0;
+    if (pid_ <= 0 || ::waitpid(pid_, &status, WNOHANG) != pid_) return std::nullopt;
+    pid_ = -1;
+    return status;
+  }
   /// Sends `signal` and reaps the child; returns its wait status.
   /// A child that has not exited 10 s after `signal` is killed (SIGKILL), as systemd does
   /// after TimeoutStopSec.
   int stop(int signal) {
     int status = 0;
+    if (pid_ <= 0) return status;  // already reaped: kill(-1, ...) would signal everything
     ::kill(pid_, signal);
     for (int i = 0; i < 1000; ++i) {
       if (::waitpid(pid_, &status, WNOHANG) == pid_) {
