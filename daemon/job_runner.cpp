@@ -177,15 +177,15 @@ void JobRunner::worker() {
 
 void JobRunner::probe_scanner() {
   const bool was_online = online_.load();
-  bool now_online = scanner_.online();
-  if (!now_online) {
-    // identify() opens the device when it has come back (hotplug, replug).
-    const auto info = scanner_.identify();
-    now_online = info.ok() && scanner_.online();
-    if (now_online) {
-      log_.info("scanner online: " + info->kind + " " + info->model + " serial " + info->serial +
-                " firmware " + info->firmware);
-    }
+  // identify() every time, not only while offline: it takes in the USB events since the last
+  // probe (a scanner unplugged, or power-cycled, while the station was idle), reopens the
+  // device when it is back, and otherwise answers from the open link without any I/O.
+  // online() alone would go on reporting the state of the last scan.
+  const auto info = scanner_.identify();
+  const bool now_online = info.ok() && scanner_.online();
+  if (now_online && !was_online) {
+    log_.info("scanner online: " + info->kind + " " + info->model + " serial " + info->serial +
+              " firmware " + info->firmware);
   }
   if (was_online && !now_online) {
     log_.warning(

@@ -45,6 +45,11 @@ UsbStats DeviceLink::usb_stats() const { return transport_ ? transport_->stats()
 
 analysis::Expected<Identity> DeviceLink::connect() {
   if (!transport_) return create_error_;
+  // libusb delivers hotplug events and transfer completions only while its events are handled,
+  // and between scans nobody handles them: without this a scanner that left while the station
+  // was idle (or left and came back) still looked online, and the next scan failed on the stale
+  // handle with "device gone" although the device was there (found by station_soak --faults).
+  transport_->pump(0);
   if (online() && identity_) return *identity_;
   // An unplugged device leaves a stale handle: close it before enumerating again (notes §3).
   transport_->close();

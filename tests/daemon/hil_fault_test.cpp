@@ -4,6 +4,7 @@
 // PLC as its ERROR_DETAIL.
 #include <csignal>
 #include <set>
+#include <thread>
 
 #include "hil_rig.hpp"
 
@@ -56,6 +57,51 @@ TEST_F(HilTest, UnplugMidScanIsAFaultAndAfterResetTheNextCyclePasses) {
   EXPECT_EQ(next->result.code, regs::ResultCode::kOk);
   expect_springback(report(2), testing::kGoodSpringback, 0.1);
   EXPECT_EQ(daemon->stop(SIGTERM), 0);
+}
+
+// Found by the fault campaign (station_soak --faults): between scans nobody handled libusb's
+// events, so the daemon never saw a scanner leave while it was idle. SCANNER_ONLINE stayed 1
+// with the cable out, and a scanner power-cycled between two parts failed the next part's scan
+// with ERROR_DETAIL 1 (device gone) although it was plugged in again.
+TEST_F(HilTest, UnplugBetweenScansTurnsScannerOnlineOffAndReplugOn) {
+  emulate(testing::kGoodSpringback);
+  auto daemon = start_daemon();
+  auto client = plc(daemon->port());
+  wait_online(*client);
+  emulator_->unplug();
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
+  auto offline = client->wait_for(
+      [deadline](const auto& s) {
+        return !s.bit(regs::kDiScannerOnline) || std::chrono::steady_clock::now() > deadline;
+      },
+      "SCANNER_ONLINE = 0");
+  ASSERT_TRUE(offline.ok()) << offline.message();
+  EXPECT_FALSE(offline->bit(regs::kDiScannerOnline)) << "5 s after the unplug";
+  EXPECT_FALSE(offline->bit(regs::kDiReady));
+  emulator_->plug();
+  wait_online(*client);
+  auto next = client->run_cycle(1, 1);
+  ASSERT_TRUE(next.ok()) << next.message();
+  EXPECT_EQ(next->result.code, regs::ResultCode::kOk);
+}
+
+TEST_F(HilTest, ScannerPowerCycledBetweenScansDoesNotFailTheNextScan) {
+  emulate(testing::kGoodSpringback);
+  auto daemon = start_daemon();
+  auto client = plc(daemon->port());
+  wait_online(*client);
+  auto first = client->run_cycle(1, 1);
+  ASSERT_TRUE(first.ok()) << first.message();
+  EXPECT_EQ(first->result.code, regs::ResultCode::kOk);
+  // Out and back in quicker than the runner's probe (1 s): the old handle is stale.
+  emulator_->unplug();
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  emulator_->plug();
+  auto next = client->run_cycle(2, 1);
+  ASSERT_TRUE(next.ok()) << next.message();
+  EXPECT_EQ(next->result.code, regs::ResultCode::kOk)
+      << "ERROR_DETAIL " << client->read_status()->live[regs::kIrErrorDetail];
+  EXPECT_EQ(next->error_code, 0);
 }
 
 TEST_F(HilTest, TriggerWhileBusyIsRejectedAndTheRunningCycleStillEndsOnce) {
