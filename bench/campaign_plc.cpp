@@ -202,6 +202,7 @@ bool Campaign::take_result(std::uint16_t job, bool& drop_before_ack) {
   } else if (unacked_seq_ != seq) {
     check_result(job, r, "RESULT_VALID");
     outcome(result_text(*status, r.read.code));
+    expect_reported(*status, r.read.code);
   } else {
     check_result(r.read.job_id, r, "RESULT_VALID (read again)");
   }
@@ -255,8 +256,8 @@ void Campaign::after_restart(std::uint16_t job, const simulators::StationStatus&
 
 void Campaign::check_result(std::uint16_t job, const ResultRegisters& r, const char* how) {
   const std::uint16_t seq = r.read.seq;
-  const std::string what = std::string(how) + " seq " + std::to_string(seq) + " job " +
-                           std::to_string(r.read.job_id);
+  const std::string what =
+      std::string(how) + " seq " + std::to_string(seq) + " job " + std::to_string(r.read.job_id);
   if (r.read.job_id != job) {
     fail(collected_jobs_.count(r.read.job_id) ? tally_.duplicated : tally_.stale,
          what + " while the PLC waits for job " + std::to_string(job));
@@ -268,11 +269,44 @@ void Campaign::check_result(std::uint16_t job, const ResultRegisters& r, const c
   }
   collected_jobs_.insert(job);
   if (std::string(how) == "RESULT_VALID") ++tally_.collected;
-  // RESULT_SEQ == record number while fewer than 65535 results exist (regs::result_seq_from_record).
+  // RESULT_SEQ == record number while fewer than 65535 results exist
+  // (regs::result_seq_from_record).
   const auto stored = load_record(paths_.reports, seq);
   if (!stored) return fail(tally_.stale, what + ": no stored report for that seq");
   const std::string diff = difference(r.block, r.read, *stored, regs::WordOrder::kAbcd);
   if (!diff.empty()) fail(tally_.stale, what + ": " + diff);
+}
+
+void Campaign::expect_reported(const simulators::StationStatus& status, regs::ResultCode code) {
+  using D = regs::ErrorDetail;
+  D expected = D::kNone;  // an analysed part: RESULT_CODE 0, 1 or 5, no scan error
+  switch (kind_) {
+    case FaultKind::kUnplug:
+      expected = D::kDeviceGone;
+      break;
+    case FaultKind::kStuckHalt:
+      expected = D::kStalledEndpoint;
+      break;
+    case FaultKind::kBadCrc:
+      expected = D::kCorruptData;
+      break;
+    case FaultKind::kSequenceGap:
+      expected = D::kSequenceGap;
+      break;
+    case FaultKind::kScanTimeout:
+      expected = D::kTimeout;
+      break;
+    default:
+      break;
+  }
+  const bool scan_failed = code == regs::ResultCode::kScanFailed;
+  const auto detail = static_cast<D>(status.live[regs::kIrErrorDetail]);
+  const bool as_injected = expected == D::kNone
+                               ? !scan_failed && code != regs::ResultCode::kAnalysisFailed
+                               : scan_failed && detail == expected;
+  if (!as_injected)
+    fail(tally_.misreported, result_text(status, code) + " where ERROR_DETAIL " +
+                                 std::to_string(static_cast<int>(expected)) + " was due");
 }
 
 void Campaign::outcome(const std::string& text) {

@@ -39,19 +39,27 @@ void print_campaign(const CampaignSettings& s, const Tally& tally, const Supervi
       "%d triggers refused\n",
       tally.collected, tally.collected_after_restart, tally.interrupted, tally.error_only,
       tally.refused);
-  std::printf("cycle time (trigger -> result collected, fault repaired), all cycles: p50 %.0f ms, "
-              "p95 %.0f ms, max %.0f ms\n",
-              percentile(all, 0.5), percentile(all, 0.95), percentile(all, 1.0));
-  std::printf("springscand: %d starts (%d SIGKILLs by the campaign), final SIGTERM: %s\n",
-              station.starts(), station.kills(),
-              final_stop_status == 0 ? "clean exit 0"
-                                     : describe_wait_status(final_stop_status).c_str());
-  std::printf("springscand RSS kB start / max / end: %ld / %ld / %ld; open fds: %ld / %ld / %ld; "
-              "largest fd growth within one process life: %ld\n",
-              tally.first.rss_kb, tally.peak.rss_kb, tally.last.rss_kb, tally.first.fds,
-              tally.peak.fds, tally.last.fds, tally.fd_growth_in_one_life);
-  std::printf("FAILURES: crashes %d, lost %d, duplicated %d, stale %d, unrecovered %d\n",
-              station.crashes(), tally.lost, tally.duplicated, tally.stale, tally.unrecovered);
+  std::printf(
+      "cycle time (trigger -> result collected, fault repaired), all cycles: p50 %.0f ms, "
+      "p95 %.0f ms, max %.0f ms\n",
+      percentile(all, 0.5), percentile(all, 0.95), percentile(all, 1.0));
+  std::printf(
+      "springscand: %d starts (%d SIGKILLs by the campaign), final SIGTERM: %s\n", station.starts(),
+      station.kills(),
+      final_stop_status == 0 ? "clean exit 0" : describe_wait_status(final_stop_status).c_str());
+  std::printf(
+      "springscand RSS kB start / max / end: %ld / %ld / %ld; open fds: %ld / %ld / %ld; "
+      "largest fd growth within one process life: %ld\n",
+      tally.first.rss_kb, tally.peak.rss_kb, tally.last.rss_kb, tally.first.fds, tally.peak.fds,
+      tally.last.fds, tally.fd_growth_in_one_life);
+  std::printf("longest-lived springscand: %d cycles, RSS %ld -> %ld kB, open fds %ld -> %ld\n",
+              tally.longest_life_cycles, tally.longest_life_first.rss_kb,
+              tally.longest_life_last.rss_kb, tally.longest_life_first.fds,
+              tally.longest_life_last.fds);
+  std::printf(
+      "FAILURES: crashes %d, lost %d, duplicated %d, stale %d, misreported %d, unrecovered %d\n",
+      station.crashes(), tally.lost, tally.duplicated, tally.stale, tally.misreported,
+      tally.unrecovered);
   for (const auto& note : station.crash_notes()) std::printf("  crash: %s\n", note.c_str());
   for (const auto& note : tally.notes) std::printf("  %s\n", note.c_str());
 }

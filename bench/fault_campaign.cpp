@@ -55,14 +55,15 @@ Campaign::Campaign(const CampaignSettings& settings, const CampaignPaths& paths,
       paths_(paths),
       emulator_(emulator),
       station_(station),
-      rng_(settings.seed) {}
+      draws_(settings.seed),
+      rng_(settings.seed ^ 0x9E3779B9u) {}
 
 double Campaign::uniform(double lo, double hi) {
   return std::uniform_real_distribution<double>(lo, hi)(rng_);
 }
 
 FaultKind Campaign::draw() {
-  return static_cast<FaultKind>(std::uniform_int_distribution<int>(0, kFaultKinds - 1)(rng_));
+  return static_cast<FaultKind>(std::uniform_int_distribution<int>(0, kFaultKinds - 1)(draws_));
 }
 
 bool Campaign::run() {
@@ -139,10 +140,14 @@ void Campaign::inject_after_trigger(FaultKind kind) {
       pause_disconnected();
       break;
     case FaultKind::kHeartbeatLoss:
-      // The PLC keeps polling but its program no longer changes PLC_HEARTBEAT.
-      if (plc_ && plc_->set_heartbeat(false)) {
-        (void)plc_->wait_for([](const auto& s) { return s.bit(regs::kDiPlcCommLost); },
-                             "PLC_COMM_LOST");
+      // The PLC keeps polling but its program no longer changes PLC_HEARTBEAT. One beat
+      // first: monitoring starts with the first change (a daemon just restarted has seen none).
+      if (plc_ && plc_->set_heartbeat(true) && plc_->set_heartbeat(false)) {
+        const auto until =
+            Clock::now() + std::chrono::duration<double>(settings_.plc_heartbeat_timeout_s + 5.0);
+        (void)plc_->wait_for(
+            [until](const auto& s) { return s.bit(regs::kDiPlcCommLost) || Clock::now() > until; },
+            "PLC_COMM_LOST");
         std::this_thread::sleep_for(std::chrono::duration<double>(uniform(0.0, 0.5)));
         if (!plc_->set_heartbeat(true)) drop_connection();
       }
@@ -171,14 +176,24 @@ void Campaign::repair_after(FaultKind kind) {
 }
 
 void Campaign::sample_usage() {
+  // With the scanner open, so that a daemon just restarted is compared with itself later on.
+  if (!plc_) return;
+  auto status = plc_->read_status();
+  if (!status || !status->bit(regs::kDiScannerOnline)) return;
   const pid_t pid = station_.pid();
   const Usage u = usage_of(pid);
-  if (tally_.cycles_run == 0) tally_.first = u;
+  if (tally_.first.fds == 0) tally_.first = u;
   tally_.peak.rss_kb = std::max(tally_.peak.rss_kb, u.rss_kb);
   tally_.peak.fds = std::max(tally_.peak.fds, u.fds);
   tally_.last = u;
-  const long first = first_fds_.emplace(pid, u.fds).first->second;
-  tally_.fd_growth_in_one_life = std::max(tally_.fd_growth_in_one_life, u.fds - first);
+  Life& life = lives_.emplace(pid, Life{u, 0}).first->second;
+  ++life.cycles;
+  tally_.fd_growth_in_one_life = std::max(tally_.fd_growth_in_one_life, u.fds - life.first.fds);
+  if (life.cycles >= tally_.longest_life_cycles) {
+    tally_.longest_life_cycles = life.cycles;
+    tally_.longest_life_first = life.first;
+    tally_.longest_life_last = u;
+  }
 }
 
 namespace {
@@ -201,7 +216,7 @@ void write_config(const CampaignSettings& s, const CampaignPaths& p) {
                              "/demo/hat-profile.step\"\n  settings { verdict { tolerance_mm: 0.5 "
                              "angle_tolerance_deg: 2.0 } } }\n"
                           << "report_dir: \"" << p.reports << "\"\nmodel_cache_dir: \"" << p.dir
-                          << "/cache\"\nreport_retention: 20\nlog_level: \"warning\"\n";
+                          << "/cache\"\nreport_retention: 20\nlog_level: \"info\"\n";
 }
 
 }  // namespace
@@ -226,7 +241,10 @@ int run_fault_campaign(const CampaignSettings& settings) {
     return 1;
   }
   write_config(settings, paths);
-  SupervisorSettings supervised{SPRINGSCAND_EXE, paths.config, paths.dir, paths.log,
+  SupervisorSettings supervised{SPRINGSCAND_EXE,
+                                paths.config,
+                                paths.dir,
+                                paths.log,
                                 {"LD_PRELOAD=" + simulators::umockdev_preload_library(),
                                  "UMOCKDEV_DIR=" + (*emulator)->root_dir()}};
   supervised.restart_delay_s = settings.restart_delay_s;
@@ -239,12 +257,12 @@ int run_fault_campaign(const CampaignSettings& settings) {
     const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
     const int stop_status = station.stop();
     print_campaign(settings, campaign.tally(), station, wall_s, stop_status);
-    const bool clean = finished && campaign.tally().failures() == 0 && station.crashes() == 0 &&
-                       stop_status == 0;
+    const bool clean =
+        finished && campaign.tally().failures() == 0 && station.crashes() == 0 && stop_status == 0;
     result = clean ? 0 : 1;
     if (!clean) std::fprintf(stderr, "springscand's log: %s (kept)\n", paths.log.c_str());
   }
-  if (result == 0) fs::remove_all(dir);
+  if (result == 0 && !settings.keep_files) fs::remove_all(dir);
   return result;
 }
 

@@ -15,14 +15,15 @@ struct CampaignSettings {
   int cycles = 1000;
   std::uint32_t seed = 1;  ///< draws the faults and their timing; the same seed, the same draws
   // A small scan, so that a cycle is about the handshake and the faults, not the analysis.
-  double step_mm = 2.0;         ///< 41 profiles over the demo hat's 80 mm width
+  double step_mm = 2.0;  ///< 41 profiles over the demo hat's 80 mm width
   int points_per_profile = 200;
-  double scan_s = 0.3;          ///< the device paces its frames over this (a "mid-scan" exists)
-  long surface_points = 100000;  ///< the simulated part's surface
+  double scan_s = 0.3;             ///< the device paces its frames over this (a "mid-scan" exists)
+  long surface_points = 100000;    ///< the simulated part's surface
   double scanner_timeout_s = 1.0;  ///< scanner.timeout_s: how long a silent scanner is waited for
   double plc_heartbeat_timeout_s = 1.5;  ///< modbus.plc_heartbeat_timeout_s
   double restart_delay_s = 0.1;          ///< the supervisor's RestartSec
-  double unrecovered_after_s = 60.0;  ///< no result or READY this long: the campaign gives up
+  double unrecovered_after_s = 60.0;     ///< no result or READY this long: the campaign gives up
+  bool keep_files = false;  ///< keep the directory (reports, springscand.log) even when clean
 };
 
 /// Runs the campaign and prints its figures. Returns 0 when every failure count is 0.

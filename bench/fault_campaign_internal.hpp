@@ -50,15 +50,15 @@ const char* fault_name(FaultKind kind);
 /// The figures of one fault kind.
 struct KindFigures {
   int cycles = 0;
-  std::vector<double> cycle_ms;           ///< trigger -> the cycle's result collected, recovered
-  std::map<std::string, int> outcomes;    ///< what the PLC saw, e.g. "RESULT_CODE 3, DETAIL 5"
+  std::vector<double> cycle_ms;         ///< trigger -> the cycle's result collected, recovered
+  std::map<std::string, int> outcomes;  ///< what the PLC saw, e.g. "RESULT_CODE 3, DETAIL 5"
 };
 
 struct Tally {
   // Failures: each must stay 0.
-  int lost = 0;        ///< accepted, then neither a result nor an error the PLC can see
-  int duplicated = 0;  ///< a job's result shown valid twice (a new seq, or again after ACK)
-  int stale = 0;       ///< RESULT_VALID whose registers are not the stored report of that job
+  int lost = 0;         ///< accepted, then neither a result nor an error the PLC can see
+  int duplicated = 0;   ///< a job's result shown valid twice (a new seq, or again after ACK)
+  int stale = 0;        ///< RESULT_VALID whose registers are not the stored report of that job
   int unrecovered = 0;  ///< the station did not come back to READY (the campaign stops)
   std::vector<std::string> notes;  ///< one line per failure
   // Outcomes.
@@ -67,12 +67,18 @@ struct Tally {
   int interrupted = 0;  ///< killed before its report was stored: BOOT_ID changed, no record
   int error_only = 0;   ///< ended with ERROR and no result (e.g. ERROR_CODE 5)
   int refused = 0;      ///< a trigger refused although READY was 1
+  /// Results that do not say what was injected: a scan failure in a cycle without a device
+  /// fault, or a device fault reported with another ERROR_DETAIL.
+  int misreported = 0;
   std::array<KindFigures, kFaultKinds> kinds;
   // springscand's resources, sampled after every cycle (station idle).
   Usage first, peak, last;
   long fd_growth_in_one_life = 0;  ///< the largest fds increase within one process's life
+  /// The longest-lived springscand: its cycles and its first and last samples.
+  int longest_life_cycles = 0;
+  Usage longest_life_first, longest_life_last;
   int cycles_run = 0;
-  int failures() const { return lost + duplicated + stale + unrecovered; }
+  int failures() const { return lost + duplicated + stale + unrecovered + misreported; }
 };
 
 /// A result as the PLC read it: the block raw and decoded (with the vectors), one RESULT_SEQ.
@@ -120,13 +126,15 @@ class Campaign {
   bool read_block(ResultRegisters& out);
   void check_result(std::uint16_t job, const ResultRegisters& read, const char* how);
   void outcome(const std::string& text);
+  void expect_reported(const simulators::StationStatus& status, regs::ResultCode code);
   void fail(int& counter, const std::string& note);
 
   CampaignSettings settings_;
   CampaignPaths paths_;
   simulators::EmulatedUsbScanner& emulator_;
   Supervisor& station_;
-  std::mt19937 rng_;
+  std::mt19937 draws_;  ///< the faults only: the same seed gives the same sequence of faults
+  std::mt19937 rng_;    ///< where and when each fault strikes, the PLC's choices
   std::unique_ptr<simulators::PlcClient> plc_;
   Tally tally_;
   FaultKind kind_ = FaultKind::kNone;  ///< this cycle's fault
@@ -135,12 +143,17 @@ class Campaign {
   std::set<std::uint16_t> collected_jobs_;
   std::set<std::uint16_t> acked_seqs_;
   std::optional<std::uint16_t> unacked_seq_;  ///< read, checked, not yet acknowledged
-  std::map<pid_t, long> first_fds_;           ///< per springscand process
+  /// Per springscand process: its first sample (scanner open) and the cycles it served.
+  struct Life {
+    Usage first;
+    int cycles = 0;
+  };
+  std::map<pid_t, Life> lives_;
 };
 
 /// Prints the campaign's figures (campaign_report.cpp); `final_stop_status` is the wait status
 /// of the last SIGTERM.
-void print_campaign(const CampaignSettings& settings, const Tally& tally,
-                    const Supervisor& station, double wall_s, int final_stop_status);
+void print_campaign(const CampaignSettings& settings, const Tally& tally, const Supervisor& station,
+                    double wall_s, int final_stop_status);
 
 }  // namespace springscan::bench

@@ -10,8 +10,7 @@ namespace springscan::bench {
 std::string describe_wait_status(int status) {
   if (WIFEXITED(status)) return "exit " + std::to_string(WEXITSTATUS(status));
   if (WIFSIGNALED(status))
-    return "signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) +
-           ")";
+    return "signal " + std::to_string(WTERMSIG(status)) + " (" + strsignal(WTERMSIG(status)) + ")";
   return "wait status " + std::to_string(status);
 }
 
@@ -50,8 +49,8 @@ void Supervisor::restart() {
 bool Supervisor::check() {
   const auto status = process_->exited();
   if (!status) return false;
-  crash_notes_.push_back("springscand (start " + std::to_string(starts_) + ") ended by itself: " +
-                         describe_wait_status(*status));
+  crash_notes_.push_back("springscand (start " + std::to_string(starts_) +
+                         ") ended by itself: " + describe_wait_status(*status));
   restart();
   return true;
 }
@@ -62,8 +61,7 @@ void Supervisor::kill_and_restart() {
   ++kills_;
   if (!WIFSIGNALED(status) || WTERMSIG(status) != SIGKILL) {
     // It ended some other way before our signal arrived.
-    crash_notes_.push_back("springscand ended before our SIGKILL: " +
-                           describe_wait_status(status));
+    crash_notes_.push_back("springscand ended before our SIGKILL: " + describe_wait_status(status));
   }
   restart();
 }

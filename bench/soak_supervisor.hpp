@@ -13,14 +13,14 @@
 namespace springscan::bench {
 
 struct SupervisorSettings {
-  std::string exe;                 ///< springscand
-  std::string config;              ///< its --config
-  std::string work_dir;            ///< for the notify socket
-  std::string log_path;            ///< the daemon's stdout and stderr, appended over restarts
-  std::vector<std::string> env;    ///< added to the environment ("NAME=value")
-  double restart_delay_s = 0.1;    ///< RestartSec (the unit has 1 s; shorter keeps cycles fast)
-  double ready_timeout_s = 60.0;   ///< TimeoutStartSec
-  int max_failed_starts = 5;       ///< give up after this many starts in a row without READY
+  std::string exe;                ///< springscand
+  std::string config;             ///< its --config
+  std::string work_dir;           ///< for the notify socket
+  std::string log_path;           ///< the daemon's stdout and stderr, appended over restarts
+  std::vector<std::string> env;   ///< added to the environment ("NAME=value")
+  double restart_delay_s = 0.1;   ///< RestartSec (the unit has 1 s; shorter keeps cycles fast)
+  double ready_timeout_s = 60.0;  ///< TimeoutStartSec
+  int max_failed_starts = 5;      ///< give up after this many starts in a row without READY
 };
 
 class Supervisor {

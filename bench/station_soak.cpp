@@ -97,8 +97,10 @@ Options parse(int argc, char** argv) {
 /// --faults: the campaign's settings, its small-scan defaults overridden by the options given.
 int run_campaign(int argc, char** argv) {
   bench::CampaignSettings c;
-  for (int i = 1; i + 1 < argc; ++i) {
+  for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
+    if (arg == "--keep") c.keep_files = true;
+    if (i + 1 == argc) break;
     if (arg == "--cycles") c.cycles = std::stoi(argv[i + 1]);
     if (arg == "--seed") c.seed = static_cast<std::uint32_t>(std::stoul(argv[i + 1]));
     if (arg == "--points-per-profile") c.points_per_profile = std::stoi(argv[i + 1]);

@@ -6,14 +6,13 @@
 // emulated USB scanner; an optional output file takes the child's stdout and stderr (appended,
 // so a supervisor restarting the daemon keeps one log, as the journal would).
 
+#include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <fcntl.h>
 
 #include <atomic>
 #include <chrono>
