@@ -1,7 +1,7 @@
 #pragma once
-// Internals of the fault campaign, shared by fault_campaign.cpp (the cycles and their faults)
-// and campaign_plc.cpp (the PLC program: handshake, reconnection, recovery and the checks of
-// every result it collects). Not part of any interface.
+// Internals of the fault campaign, shared by fault_campaign.cpp (the cycles and their faults),
+// campaign_plc.cpp (the PLC program: handshake, reconnection, recovery), campaign_checks.cpp
+// (every result it collects checked) and campaign_report.cpp (the figures). Not an interface.
 
 #include <array>
 #include <chrono>
@@ -150,6 +150,9 @@ class Campaign {
   };
   std::map<pid_t, Life> lives_;
 };
+
+/// "RESULT_CODE 3, ERROR_CODE 2 DETAIL 5": a result as the PLC saw it, for the outcome table.
+std::string result_text(const simulators::StationStatus& status, regs::ResultCode code);
 
 /// Prints the campaign's figures (campaign_report.cpp); `final_stop_status` is the wait status
 /// of the last SIGTERM.
