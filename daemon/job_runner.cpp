@@ -182,10 +182,15 @@ void JobRunner::probe_scanner() {
   // device when it is back, and otherwise answers from the open link without any I/O.
   // online() alone would go on reporting the state of the last scan.
   const auto info = scanner_.identify();
-  const bool now_online = info.ok() && scanner_.online();
-  if (now_online && !was_online) {
+  // Present and open is online even when identify() refuses the device (another kind than
+  // configured), as before: a trigger then fails with the reason (ERROR_DETAIL 9) instead of
+  // the station sitting offline; the reason is logged here too.
+  const bool now_online = scanner_.online();
+  if (now_online && !was_online && info) {
     log_.info("scanner online: " + info->kind + " " + info->model + " serial " + info->serial +
               " firmware " + info->firmware);
+  } else if (now_online && !was_online) {
+    log_.warning("scanner present but not usable: " + info.message());
   }
   if (was_online && !now_online) {
     log_.warning(
