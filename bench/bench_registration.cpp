@@ -11,6 +11,8 @@
 
 #include "analysis/inspection/pipeline.hpp"
 #include "analysis/io/point_io.hpp"
+#include "analysis/registration/boundary.hpp"
+#include "analysis/registration/global_fit.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {
@@ -92,5 +94,29 @@ BENCHMARK(BM_Inspection1MScan100kModel)
     ->MeasureProcessCPUTime();
 
 }  // namespace
+
+// The boundary stage alone (registration/boundary.hpp) after the global fit: the profile's
+// length is free for the surface, its ends pin it.
+void BM_Boundary1MScan(benchmark::State& state) {
+  const Data& d = data();
+  static const KdTree tree(d.model.samples.points);
+  static const Transform T = [&d] {
+    GlobalFitSettings s;
+    auto fit = global_fit(d.scan.points, tree, d.model.samples.normals, s);
+    return fit ? fit->T_cad_scan : Transform::Identity();
+  }();
+  double shift = 0.0;
+  for (auto _ : state) {
+    auto pinned = pin_to_boundary(d.scan.points, T, d.model, tree);
+    if (!pinned) {
+      state.SkipWithError(pinned.message().c_str());
+      return;
+    }
+    shift = pinned->free_directions.empty() ? 0.0 : pinned->free_directions[0].shift_mm;
+    benchmark::DoNotOptimize(pinned->T_cad_scan);
+  }
+  state.counters["shift_mm"] = shift;
+}
+BENCHMARK(BM_Boundary1MScan)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 
 BENCHMARK_MAIN();
