@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 namespace springscan::analysis::io_detail {
@@ -192,9 +193,11 @@ std::optional<Error> PlyBody::walk_record(const PlyElement& element, std::uint64
     const double available = ascii ? static_cast<double>(cursor_.remaining() + 1)
                                    : static_cast<double>(bytes_.size() - offset_);
     if (v * static_cast<double>(item_size) > available) {
-      return error_at(
-          element, record,
-          "list of " + std::to_string(static_cast<std::uint64_t>(v)) + " items overruns the file");
+      // %.15g: a count may be far beyond any integer type (1e57 from a double count field).
+      char count_text[32];
+      std::snprintf(count_text, sizeof count_text, "%.15g", v);
+      return error_at(element, record,
+                      std::string("list of ") + count_text + " items overruns the file");
     }
     const auto count = static_cast<std::uint64_t>(v);
     for (std::uint64_t k = 0; k < count; ++k) {
