@@ -59,7 +59,7 @@ void BM_FieldAndCompensation(benchmark::State& state) {
     auto raw = deformation_field(f.reduced.model_centers, f.reduced.scan_centers, settings);
     const FieldRefinementInput input{f.reduced.model_centers, f.normals,     f.faces,
                                      f.model.segmentation,    &f.springback, f.scan.points,
-                                     f.model.samples.points};
+                                     f.model.samples.points,  nullptr};
     const DeformationField field = refine_field(*raw, input, settings.refinement);
     auto comp = compensation(field, f.reduced.model_centers);
     covered = field.vectors.size();
@@ -84,7 +84,7 @@ void BM_Refinement(benchmark::State& state) {
   const auto raw = deformation_field(f.reduced.model_centers, f.reduced.scan_centers, settings);
   const FieldRefinementInput input{f.reduced.model_centers, f.normals,     f.faces,
                                    f.model.segmentation,    &f.springback, f.scan.points,
-                                   f.model.samples.points};
+                                   f.model.samples.points,  nullptr};
   for (auto _ : state) benchmark::DoNotOptimize(refine_field(*raw, input, settings.refinement));
 }
 BENCHMARK(BM_Refinement)

@@ -171,8 +171,7 @@ void control_point_attributes(const PartModel& model, const KdTree& model_tree,
 // points (docs/matching.md). Returns the field's coverage for the verdict.
 Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& model_tree,
                                         const ReductionOutcome& reduced,
-                                        const Transform& T_cad_scan,
-                                        const std::vector<Vec3>& scan_in_cad,
+                                        const Transform& T_cad_scan, const PointCloud& scan_in_cad,
                                         const SpringbackResult* springback,
                                         const PipelineSettings& s, InspectionOutcome& out) {
   v1::InspectionReport& report = out.report;
@@ -184,14 +183,24 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
   std::vector<Vec3> normals;
   std::vector<int> faces;
   control_point_attributes(model, model_tree, reduced.model_centers, normals, faces);
-  const FieldRefinementInput input{reduced.model_centers, normals,    faces,
-                                   model.segmentation,    springback, scan_in_cad,
-                                   model.samples.points};
+  const FieldRefinementInput input{reduced.model_centers,
+                                   normals,
+                                   faces,
+                                   model.segmentation,
+                                   springback,
+                                   scan_in_cad.points,
+                                   model.samples.points,
+                                   &scan_in_cad.normals};
   const auto field = refine_field(*raw, input, s.field.refinement);
   to_proto(field, report.mutable_deformation_field());
   if (!field.uncovered.empty())
     report.add_warnings("deformation field: " + std::to_string(field.uncovered.size()) +
                         " model control points are not covered by the scan (no vector)");
+  // On a scanned skin this means the result frame has the scan on the model's other side.
+  if (field.seen_from_far_side > 0)
+    report.add_warnings("deformation field: " + std::to_string(field.seen_from_far_side) +
+                        " of them are seen from the other side of the sheet only (the scan's "
+                        "normals point into the material there)");
   if (s.field.method == CorrespondenceMethod::kMinCostMatching && !field.optimality_certified)
     report.add_warnings("deformation field: the matching's optimality certificate failed: " +
                         field.matching.certificate.failure);
@@ -295,9 +304,8 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
-  auto coverage =
-      add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud.points,
-                      springback ? &*springback : nullptr, *config, out);
+  auto coverage = add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud,
+                                  springback ? &*springback : nullptr, *config, out);
   if (!coverage) return coverage.error();
   timings.set_deformation(ms_since(t));
 

@@ -78,9 +78,12 @@ struct DeformationField {
   bool refined = false;
   std::vector<std::uint32_t> uncovered;  ///< refined: model points the scan does not cover
   std::vector<Vec3> uncovered_points;    ///< their positions (CAD frame)
-  double scan_coverage = 0.0;            ///< refined: share of model points with a vector
-  double residual_rms_mm = 0.0;          ///< refined: rms of the supporting scan points' normal
-                                         ///< distance to the refined field's surface
+  /// refined, solids: of `uncovered`, those the scan around them saw from the other side of the
+  /// material only (its normals point into the sheet there)
+  std::size_t seen_from_far_side = 0;
+  double scan_coverage = 0.0;    ///< refined: share of model points with a vector
+  double residual_rms_mm = 0.0;  ///< refined: rms of the supporting scan points' normal
+                                 ///< distance to the refined field's surface
 };
 
 /// Nearest-neighbour pairing: every scan point picks its nearest model point; each model point

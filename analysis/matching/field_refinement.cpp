@@ -227,17 +227,65 @@ ScanGrid build_grid(const std::vector<Vec3>& centers, double reach, const std::v
   return g;
 }
 
+// The sheet thickness at every face id (the last entry: faces of unknown id): a flange's own,
+// a bend's thinner flange's, and for the other faces of a solid (rims, holes) the thinnest
+// flange's. All 0 on a surface model, which has no far side: a shell is seen from either side.
+std::vector<double> face_thickness(const PartSegmentation& s) {
+  double thinnest = 0.0;
+  int faces = 0;
+  for (const Flange& f : s.flanges) {
+    if (f.thickness_mm > 0.0 && (thinnest == 0.0 || f.thickness_mm < thinnest))
+      thinnest = f.thickness_mm;
+    for (const int id : f.face_ids) faces = std::max(faces, id + 1);
+  }
+  for (const Bend& b : s.bends)
+    for (const int id : b.face_ids) faces = std::max(faces, id + 1);
+  for (const int id : s.other_faces) faces = std::max(faces, id + 1);
+  std::vector<double> t(static_cast<std::size_t>(faces) + 1, thinnest);
+  std::unordered_map<int, double> by_id;
+  for (const Flange& f : s.flanges) {
+    by_id[f.id] = f.thickness_mm;
+    for (const int id : f.face_ids) t[static_cast<std::size_t>(id)] = f.thickness_mm;
+  }
+  for (const Bend& b : s.bends) {
+    const auto a = by_id.find(b.flange_a), c = by_id.find(b.flange_b);
+    if (a == by_id.end() || c == by_id.end()) continue;
+    for (const int id : b.face_ids)
+      t[static_cast<std::size_t>(id)] = std::min(a->second, c->second);
+  }
+  return t;
+}
+
+double thickness_at(const std::vector<double>& by_face, int face) {
+  if (face < 0 || static_cast<std::size_t>(face) + 1 >= by_face.size()) return by_face.back();
+  return by_face[static_cast<std::size_t>(face)];
+}
+
 // The normal offset of the scan around one prediction (step 2).
 struct Support {
   double offset = 0.0;  // mm along the moved normal
   double sigma = 0.0;   // robust spread of the residuals
   double sum_sq = 0.0;  // of the kept residuals about `offset`
   int count = 0;
+  int far_side = 0;  // solids: candidates whose normal points into the material here
 };
 
+// On a solid (thickness > 0) the window along the normal stays within half the thickness: the
+// other skin, one thickness behind, never enters it, whatever the scan's normals.
+double normal_window(const FieldRefinementSettings& s, double thickness) {
+  return thickness > 0.0 ? std::min(s.normal_window_mm, 0.5 * thickness) : s.normal_window_mm;
+}
+
 Support support_of(const FieldRefinementInput& in, const Prediction& pred, const ScanGrid& g,
-                   std::size_t i, const FieldRefinementSettings& s, std::vector<double>& r) {
+                   std::size_t i, double thickness, const FieldRefinementSettings& s,
+                   std::vector<double>& r) {
   r.clear();
+  const std::vector<Vec3>* scan_normals =
+      thickness > 0.0 && in.scan_normals && in.scan_normals->size() == in.scan_points.size()
+          ? in.scan_normals
+          : nullptr;
+  const double window = normal_window(s, thickness);
+  int far_side = 0;
   const Transform& M = pred.motion[i];
   const Vec3 m = in.model_points[i];
   const Vec3 n = in.model_normals[i];
@@ -272,10 +320,21 @@ Support support_of(const FieldRefinementInput& in, const Prediction& pred, const
             uq -= uq.dot(w) * w;
             res = sign * (uq.norm() - rho_m);
           }
-          if (std::abs(res) <= s.normal_window_mm) r.push_back(res);
+          if (std::abs(res) > window) continue;
+          // A scanner sees a surface from outside the material only: a scan normal against this
+          // skin's outward normal was seen from the other side of the sheet (the far skin).
+          if (scan_normals && n.dot(Rt * (*scan_normals)[g.indices[k]]) < 0.0) {
+            ++far_side;
+            continue;
+          }
+          r.push_back(res);
         }
       }
-  if (r.size() < static_cast<std::size_t>(std::max(s.min_support_points, 1))) return {};
+  if (r.size() < static_cast<std::size_t>(std::max(s.min_support_points, 1))) {
+    Support none;
+    none.far_side = far_side;
+    return none;
+  }
   // Robust mean: median and MAD, then the mean of the residuals within outlier_mad_factor.
   const auto mid = r.begin() + static_cast<long>(r.size() / 2);
   std::nth_element(r.begin(), mid, r.end());
@@ -314,11 +373,13 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
   const double reach = std::hypot(s.support_radius_mm, s.normal_window_mm);
   const ScanGrid grid = build_grid(centers, reach, in.scan_points, s.threads);
 
+  const std::vector<double> thickness = face_thickness(in.segmentation);
   std::vector<Support> support(n);
   for_each_block(n, 16, s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::vector<double> scratch;
     for (std::size_t i = begin; i < end; ++i)
-      support[i] = support_of(in, pred, grid, i, s, scratch);
+      support[i] =
+          support_of(in, pred, grid, i, thickness_at(thickness, in.model_faces[i]), s, scratch);
   });
   std::vector<std::uint32_t> partner(n, kNoScan);
   for (const auto& v : raw.vectors) partner[v.model_index] = v.scan_index;
@@ -328,6 +389,7 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
     if (support[i].count == 0) {
       out.uncovered.push_back(static_cast<std::uint32_t>(i));
       out.uncovered_points.push_back(in.model_points[i]);
+      if (support[i].far_side >= s.min_support_points) ++out.seen_from_far_side;
       continue;
     }
     DeformationVector v;

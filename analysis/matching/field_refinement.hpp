@@ -15,7 +15,11 @@
 //     along a direction no flange plane fixes (the bend lines of an extrusion), the scan's
 //     sheet edges against the CAD's give the position;
 //  3. points with fewer than min_support_points scan points around them are not covered and
-//     get no vector.
+//     get no vector. On a solid the scanner sees each skin from outside the material only: a
+//     scan point supports a control point only if its normal (when the scan has normals) points
+//     out of the material there, and the window along the normal stays within half the sheet
+//     thickness, so the far skin never supports a vector (docs/matching.md "Refined field",
+//     coverage).
 // Each vector's uncertainty is the robust sigma of its support over sqrt(count).
 //
 // Thread safety: a pure function; the result does not depend on the thread count.
@@ -37,6 +41,10 @@ struct FieldRefinementInput {
   const SpringbackResult* springback;      ///< the local fits and bend table; null: none
   const std::vector<Vec3>& scan_points;    ///< the whole scan in the result frame
   const std::vector<Vec3>& model_samples;  ///< all model samples (the sheet's edges)
+  /// The scan's normals (result frame), pointing out of the material toward the sensor as the
+  /// drivers and scanner files give them; null or empty: none (the far skin is then excluded by
+  /// position alone).
+  const std::vector<Vec3>* scan_normals = nullptr;
 };
 
 /// The refined field: `vectors` replaced by one refined vector per covered control point

@@ -113,6 +113,7 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
       to.insert(to.end(), from.begin(), from.end());
     };
     append(scan.cloud.points, pass->cloud.points);
+    append(scan.cloud.normals, pass->cloud.normals);  // toward the scanner, as a scanner gives
     append(scan.cad_points, pass->cad_points);
     append(scan.outlier, pass->outlier);
   }
