@@ -1,5 +1,7 @@
-// ThreadSanitizer defaults of the HIL test process (not of springscand, its child, which runs
-// with the plain TSAN_OPTIONS of scripts/test.sh tsan). Compiled only in the TSan build.
+// ThreadSanitizer defaults of the test processes that host umockdev's USB emulation: the HIL
+// tests and the daemon tests (scanner_calibration_test). Not of springscand, the HIL tests'
+// child, which runs with the plain TSAN_OPTIONS of scripts/test.sh tsan. Only the TSan build
+// defines the function.
 //
 // This process hosts umockdev's USB emulation: a GLib main loop on umockdev's worker thread
 // takes over devices, strings, closures and slice memory from the test's main thread. GLib and
