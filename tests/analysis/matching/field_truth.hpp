@@ -23,6 +23,14 @@
 
 namespace springscan::analysis::testing {
 
+// Under ASan, UBSan or TSan the analysis runs 5-15x slower: repeated cases run once there (the
+// sanitizer stages look for memory errors and races, the release suite for accuracy).
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kUnderSanitizer = true;
+#else
+constexpr bool kUnderSanitizer = false;
+#endif
+
 // The same size under the sanitizers (about 10 s a case there instead of 1): the bounds are the
 // sub-sample accuracy of a 200k-point scan, which a tenth of the points does not reach.
 constexpr std::int64_t kFieldScanPoints = 200'000;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "tests/analysis/matching/field_truth.hpp"
 #include "tests/analysis/synthetic.hpp"
@@ -52,7 +53,9 @@ class BoundaryFit : public ::testing::TestWithParam<int> {};
 TEST_P(BoundaryFit, ZeroSpringbackScannedWholeComesBackAtItsPose) {
   const Profile p = profiles()[static_cast<std::size_t>(GetParam())];
   const auto& cad = testing::field_part(p.name, &p.spec);
-  for (unsigned seed : {1u, 2u, 3u}) {
+  const std::vector<unsigned> seeds =
+      testing::kUnderSanitizer ? std::vector<unsigned>{1u} : std::vector<unsigned>{1u, 2u, 3u};
+  for (unsigned seed : seeds) {
     std::mt19937 rng(400u + 10u * static_cast<unsigned>(GetParam()) + seed);
     testing::FieldScenario sc;
     sc.springback_deg = {0.0};
