@@ -60,6 +60,12 @@ analysis::Expected<Identity> DeviceLink::connect() {
   sequence_.reset();
   consecutive_timeouts_ = 0;
   auto reply = request(p::MessageType::kIdentify, {}, p::MessageType::kIdentity);
+  if (!reply && reply.code() == ErrorCode::kTimeout) {
+    // A host that died mid-scan (springscand killed and restarted) leaves the device in that
+    // scan: stop it and drain, as after any aborted scan, then ask again (station_soak --faults).
+    resync();
+    reply = request(p::MessageType::kIdentify, {}, p::MessageType::kIdentity);
+  }
   if (!reply) return reply.error();
   auto id = decode_identity(reply->payload);
   if (!id) return id.error().prepend(who() + ": ");
