@@ -9,7 +9,6 @@
 #include <thread>
 
 #include "bench/fault_campaign_internal.hpp"
-#include "simulators/parts/sheet_part.hpp"
 
 namespace springscan::bench {
 
@@ -198,15 +197,6 @@ void Campaign::sample_usage() {
 
 namespace {
 
-analysis::Expected<analysis::PointCloud> demo_surface(long points) {
-  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
-  parts::ScanSimulationSettings dense;
-  dense.point_count = points;
-  dense.noise_sigma_mm = 0.0;
-  return parts::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
-}
-
 void write_config(const CampaignSettings& s, const CampaignPaths& p) {
   std::ofstream(p.config) << "modbus { bind_address: \"127.0.0.1\" port: 0\n"
                           << "  plc_heartbeat_timeout_s: " << s.plc_heartbeat_timeout_s << " }\n"
@@ -228,30 +218,21 @@ int run_fault_campaign(const CampaignSettings& settings) {
   fs::create_directories(dir);
   const CampaignPaths paths{dir.string(), (dir / "station.textproto").string(),
                             (dir / "reports").string(), (dir / "springscand.log").string()};
-  auto surface = demo_surface(settings.surface_points);
-  if (!surface) return 1;
-  simulators::ScannerDeviceSettings device;
-  device.laser.step_mm = settings.step_mm;
-  device.laser.points_per_profile = settings.points_per_profile;
-  device.config.points_per_profile = static_cast<std::uint16_t>(settings.points_per_profile);
-  device.scan_duration_s = settings.scan_s;
-  auto emulator = simulators::EmulatedUsbScanner::create(device, std::move(*surface));
-  if (!emulator) {
-    std::fprintf(stderr, "%s\n", emulator.message().c_str());
-    return 1;
-  }
+  auto emulator = make_demo_scanner(settings.surface_points, settings.step_mm,
+                                    settings.points_per_profile, settings.scan_s);
+  if (!emulator) return 1;
   write_config(settings, paths);
   SupervisorSettings supervised{SPRINGSCAND_EXE,
                                 paths.config,
                                 paths.dir,
                                 paths.log,
                                 {"LD_PRELOAD=" + simulators::umockdev_preload_library(),
-                                 "UMOCKDEV_DIR=" + (*emulator)->root_dir()}};
+                                 "UMOCKDEV_DIR=" + emulator->root_dir()}};
   supervised.restart_delay_s = settings.restart_delay_s;
   int result = 1;
   {
     Supervisor station(supervised);
-    Campaign campaign(settings, paths, **emulator, station);
+    Campaign campaign(settings, paths, *emulator, station);
     const auto start = Clock::now();
     const bool finished = campaign.run();
     const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();

@@ -1,15 +1,21 @@
 #pragma once
-// What both station_soak modes measure of springscand from outside: its RSS, open fds and CPU
-// time (from /proc), and percentiles of the figures they collect.
+// What both station_soak modes share: the emulated scanner they run springscand against, and
+// what they measure of springscand from outside: its RSS, open fds and CPU time (from /proc),
+// and percentiles of the figures they collect.
 
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "simulators/parts/sheet_part.hpp"
+#include "simulators/usb_emulator.hpp"
 
 namespace springscan::bench {
 
@@ -52,6 +58,35 @@ inline Usage usage_of(pid_t pid) {
   }
   u.cpu_s = static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
   return u;
+}
+
+/// The emulated USB laser scanner over the demo hat as produced (springback 1.5, 0.8, 1.1,
+/// 0.4 deg; demo/README.md), sampled with `surface_points`; errors are printed.
+inline std::unique_ptr<simulators::EmulatedUsbScanner> make_demo_scanner(long surface_points,
+                                                                         double step_mm,
+                                                                         int points_per_profile,
+                                                                         double scan_s) {
+  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
+  spec.width_mm = 80.0;
+  parts::ScanSimulationSettings dense;
+  dense.point_count = surface_points;
+  dense.noise_sigma_mm = 0.0;
+  auto surface = parts::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
+  if (!surface) {
+    std::fprintf(stderr, "%s\n", surface.message().c_str());
+    return nullptr;
+  }
+  simulators::ScannerDeviceSettings device;
+  device.laser.step_mm = step_mm;
+  device.laser.points_per_profile = points_per_profile;
+  device.config.points_per_profile = static_cast<std::uint16_t>(points_per_profile);
+  device.scan_duration_s = scan_s;
+  auto emulator = simulators::EmulatedUsbScanner::create(device, std::move(*surface));
+  if (!emulator) {
+    std::fprintf(stderr, "%s\n", emulator.message().c_str());
+    return nullptr;
+  }
+  return std::move(*emulator);
 }
 
 }  // namespace springscan::bench

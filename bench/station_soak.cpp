@@ -30,7 +30,6 @@
 #include "bench/fault_campaign.hpp"
 #include "bench/soak_common.hpp"
 #include "proto/springscan.pb.h"
-#include "simulators/parts/sheet_part.hpp"
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
 #include "tests/daemon/daemon_process.hpp"
@@ -111,16 +110,6 @@ int run_campaign(int argc, char** argv) {
   return bench::run_fault_campaign(c);
 }
 
-/// The demo hat as produced (springback 1.5, 0.8, 1.1, 0.4 deg; demo/README.md).
-analysis::Expected<analysis::PointCloud> demo_surface(long points) {
-  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
-  parts::ScanSimulationSettings dense;
-  dense.point_count = points;
-  dense.noise_sigma_mm = 0.0;
-  return parts::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -131,18 +120,9 @@ int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   const fs::path dir = fs::temp_directory_path() / ("springscan-soak-" + std::to_string(getpid()));
   fs::create_directories(dir);
-  auto surface = demo_surface(o.surface_points);
-  if (!surface) return 1;
-  simulators::ScannerDeviceSettings device;
-  device.laser.step_mm = o.step_mm;
-  device.laser.points_per_profile = o.points_per_profile;
-  device.config.points_per_profile = static_cast<std::uint16_t>(o.points_per_profile);
-  device.scan_duration_s = o.scan_s;
-  auto emulator = simulators::EmulatedUsbScanner::create(device, std::move(*surface));
-  if (!emulator) {
-    std::fprintf(stderr, "%s\n", emulator.message().c_str());
-    return 1;
-  }
+  auto emulator =
+      bench::make_demo_scanner(o.surface_points, o.step_mm, o.points_per_profile, o.scan_s);
+  if (!emulator) return 1;
   const std::string config = (dir / "station.textproto").string();
   const std::string reports = (dir / "reports").string();
   std::ofstream(config) << "modbus { bind_address: \"127.0.0.1\" port: 0 }\n"
@@ -157,7 +137,7 @@ int main(int argc, char** argv) {
   {
     daemon::testing::DaemonProcess station(SPRINGSCAND_EXE, config, dir.string(),
                                            {"LD_PRELOAD=" + simulators::umockdev_preload_library(),
-                                            "UMOCKDEV_DIR=" + (*emulator)->root_dir()});
+                                            "UMOCKDEV_DIR=" + emulator->root_dir()});
     simulators::PlcClientSettings settings;
     settings.port = station.port();
     settings.step_timeout_s = 300;

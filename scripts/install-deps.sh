@@ -4,7 +4,8 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake ninja-build pkg-config ccache git
+  # python3: tests/cli/analyze_test.sh reads report.json with it.
+  build-essential cmake ninja-build pkg-config ccache git python3
   libeigen3-dev libnanoflann-dev
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libtbb-dev
