@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numbers>
 #include <unordered_map>
 
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
+#include "analysis/springback/bend_shape.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -24,6 +26,11 @@ std::string check(const PartModel& model, const SpringbackSettings& st) {
     return "bend_margin_mm " + std::to_string(st.bend_margin_mm) + " outside [0, 1000)";
   if (!(st.assignment_distance_mm > 0.0))
     return "assignment_distance_mm " + std::to_string(st.assignment_distance_mm) + " must be > 0";
+  if (!(st.shape.station_spacing_mm > 0.0 && st.shape.station_spacing_mm <= 10000.0))
+    return "shape.station_spacing_mm " + std::to_string(st.shape.station_spacing_mm) +
+           " outside (0, 10000]";
+  if (st.shape.min_stations < 1 || st.shape.min_stations > 1000)
+    return "shape.min_stations " + std::to_string(st.shape.min_stations) + " outside [1, 1000]";
   if (st.max_scan_points < 0)
     return "max_scan_points " + std::to_string(st.max_scan_points) + " must be >= 0";
   const auto& flanges = model.segmentation.flanges;
@@ -97,12 +104,11 @@ std::vector<std::uint32_t> thinned_in_space_order(const PointCloud& scan, std::s
   return order;
 }
 
-// The points of `order` per flange, by the label of their nearest model sample.
-std::vector<std::vector<std::uint32_t>> assign_points(const LocalFitTarget& target,
-                                                      const std::vector<std::int32_t>& labels,
-                                                      const PointCloud& scan,
-                                                      const std::vector<std::uint32_t>& order,
-                                                      const SpringbackSettings& st) {
+// The points of `order` per label (flanges, then bend zones), by the label of their nearest
+// model sample.
+std::vector<std::vector<std::uint32_t>> assign_points(
+    const LocalFitTarget& target, const std::vector<std::int32_t>& labels, std::size_t label_count,
+    const PointCloud& scan, const std::vector<std::uint32_t>& order, const SpringbackSettings& st) {
   std::vector<std::int32_t> flange_of(order.size(), kNoFlange);
   for_each_block(
       order.size(), kBlock, st.threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
@@ -111,7 +117,7 @@ std::vector<std::vector<std::uint32_t>> assign_points(const LocalFitTarget& targ
           if (nn) flange_of[k] = labels[nn->index];
         }
       });
-  std::vector<std::vector<std::uint32_t>> out(target.model().segmentation.flanges.size());
+  std::vector<std::vector<std::uint32_t>> out(label_count);
   for (std::size_t k = 0; k < order.size(); ++k)
     if (flange_of[k] != kNoFlange) out[static_cast<std::size_t>(flange_of[k])].push_back(order[k]);
   return out;
@@ -144,6 +150,8 @@ FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const
   return out;
 }
 
+}  // namespace
+
 // The signed angle from u to v about `axis`, from the full angle between them (degrees).
 double turn_deg(const Vec3& u, const Vec3& v, const Vec3& axis) {
   const Vec3 c = u.cross(v);
@@ -163,6 +171,8 @@ Vec3 concave_normal(const Flange& flange, const Bend& bend) {
   return axis_offset >= -0.5 * flange.thickness_mm ? n : Vec3(-n);
 }
 
+namespace {
+
 // The direction about which the sheet turns from flange a into flange b, so that the bend's
 // turn is positive: the sheet leaves flange a towards the axis (in-plane, across the axis) and
 // curves towards its concave side. From positions, not from na x nb, which vanishes for a
@@ -175,11 +185,11 @@ Vec3 turn_axis(const Flange& fa, const Vec3& concave_a, const Bend& bend) {
   return w.dot(d) < 0.0 ? Vec3(-d) : d;
 }
 
+}  // namespace
+
 // An angle difference in (-180, 180]: near 180 degrees a measured turn of -179.99 is 180.01,
 // so a closed hem that did not move has springback 0, not 359.99.
 double wrapped_deg(double a) { return std::remainder(a, 360.0); }
-
-}  // namespace
 
 BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& fb,
                              const FlangeFit& a, const FlangeFit& b) {
@@ -213,6 +223,7 @@ BendMeasurement measure_bend(const Bend& bend, const Flange& fa, const Flange& f
   const Vec3 line = a.measured_normal.cross(b.measured_normal);
   m.measured_axis_direction =
       line.dot(m.axis_direction) < 0.0 ? -line.normalized() : line.normalized();
+  m.plane_angle_deg = m.measured_angle_deg;
   m.measured = true;
   return m;
 }
@@ -232,12 +243,15 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
   result.thinning_stride = cap == 0 || scan.size() <= cap ? 1 : (scan.size() + cap - 1) / cap;
   result.points_used = (scan.size() + result.thinning_stride - 1) / result.thinning_stride;
 
-  // 1. Label the model samples by flange, leaving out a margin around the bends.
-  const auto labels = sample_labels(model, st.bend_margin_mm, st.threads);
-  // 2. Assign the (thinned) scan points to flanges by their nearest model sample.
+  // 1. Label the model samples by flange, leaving out a margin around the bends, and by bend
+  //    zone.
+  auto labels = sample_labels(model, st.bend_margin_mm, st.threads);
+  const BendZones zones = label_bend_zones(model, labels);
+  // 2. Assign the (thinned) scan points to flanges and zones by their nearest model sample.
   const LocalFitTarget target(model);
   const auto order = thinned_in_space_order(scan, result.thinning_stride);
-  auto assigned = assign_points(target, labels, scan, order, st);
+  auto assigned =
+      assign_points(target, labels, seg.flanges.size() + zones.zones.size(), scan, order, st);
   // 3. Fit each flange locally to the whole model.
   for (std::size_t f = 0; f < seg.flanges.size(); ++f)
     result.flanges.push_back(fit_flange(target, scan, seg.flanges[f], std::move(assigned[f]), st));
@@ -252,6 +266,11 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
     result.bends.push_back(
         measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b]));
   }
+  // 5. Beyond rigid flanges: flange shape, bend radius, the angle along each bend.
+  const std::vector<std::vector<std::uint32_t>> zone_points(
+      std::make_move_iterator(assigned.begin() + static_cast<std::ptrdiff_t>(seg.flanges.size())),
+      std::make_move_iterator(assigned.end()));
+  measure_shapes(model, scan, zones, zone_points, st.shape, st.threads, result);
   return result;
 }
 

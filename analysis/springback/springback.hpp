@@ -16,13 +16,25 @@
 #include "analysis/core/expected.hpp"
 #include "analysis/core/part_model.hpp"
 #include "analysis/core/point_cloud.hpp"
+#include "analysis/springback/bend_zone.hpp"
+#include "analysis/springback/flange_shape.hpp"
 #include "analysis/springback/local_fit.hpp"
 #include "analysis/springback/relative_rotation.hpp"
 
 namespace springscan::analysis {
 
+/// Beyond rigid flanges: flange shape, bend radius, angle along the bend (bend_shape.cpp).
+struct BendShapeSettings {
+  FlangeShapeSettings flange;        ///< flatness, curl, twist per flange
+  BendZoneSettings zone;             ///< the bend zone's cylinder (measured radius)
+  double station_spacing_mm = 20.0;  ///< angle along the bend: one station per this length
+  int min_stations = 3;              ///< ...and at least this many
+  int min_points_per_station = 30;   ///< a flange strip with fewer points leaves its station out
+};
+
 struct SpringbackSettings {
   LocalFitSettings local_fit;           ///< each flange's local best fit (threads: see below)
+  BendShapeSettings shape;              ///< flange shape, bend radius, angle along the bend
   double bend_margin_mm = 2.0;          ///< flange samples this close to a bend are left out
   double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
   int min_points_per_flange = 200;      ///< fewer: not fitted, its bends are not measured
@@ -42,6 +54,15 @@ struct FlangeFit {
   std::string status;  ///< why it was not fitted, or empty
   LocalFitResult fit;
   Vec3 measured_normal = Vec3::Zero();  ///< normal of the fitted plane in the CAD frame
+  FlangeShape shape;                    ///< flatness, curl, twist (shape.measured: whether)
+  bool has_bend_line = false;  ///< false: no bend orients it; curl and twist are not defined
+};
+
+/// The bend angle at one station along the bend line.
+struct BendStation {
+  double position_mm = 0.0;  ///< along axis_direction from axis_point (CAD frame)
+  double angle_deg = 0.0;    ///< measured angle there
+  double springback_deg = 0.0;
 };
 
 /// One bend: nominal geometry from the CAD, measured angle from the local fits. Whether it
@@ -61,6 +82,18 @@ struct BendMeasurement {
   Vec3 measured_axis_direction = Vec3::Zero();  ///< line of the two fitted planes, CAD frame
   bool measured = false;                        ///< false when a flange could not be fitted
   std::string status;                           ///< why it was not measured, or empty
+  /// The angle between the two flanges' fitted planes (paper section 4). It is the measured
+  /// angle unless a flange is curled; then the measured angle is the one between the tangent
+  /// planes at the flanges' ends next to the bend (NUMISHEET'93), and end_tangents is true.
+  double plane_angle_deg = 0.0;
+  bool end_tangents = false;
+  std::vector<BendStation> stations;  ///< the angle along the bend, in position order
+  double angle_min_deg = 0.0;         ///< over the stations
+  double angle_max_deg = 0.0;
+  double angle_spread_deg = 0.0;    ///< max - min
+  double angle_twist_deg = 0.0;     ///< last station's angle - first's
+  BendZoneFit zone;                 ///< the bend zone's cylinder, one side of the sheet
+  double measured_radius_mm = 0.0;  ///< inner radius from the zone (zone.fitted: whether)
 };
 
 struct SpringbackResult {
@@ -69,6 +102,16 @@ struct SpringbackResult {
   std::size_t points_used = 0;  ///< scan points after thinning
   std::size_t thinning_stride = 1;
 };
+
+/// The signed angle (degrees) from u to v about `axis`.
+double turn_deg(const Vec3& u, const Vec3& v, const Vec3& axis);
+
+/// The flange's unit normal on the concave side of `bend` (the side facing its centre of
+/// curvature), decided from where the flange's reference face lies relative to the axis.
+Vec3 concave_normal(const Flange& flange, const Bend& bend);
+
+/// An angle difference wrapped into (-180, 180] degrees.
+double wrapped_deg(double a);
 
 /// The bend angle (degrees) between two flanges as the data show it: the angle from normal_a
 /// to D * normal_b, D = relative_rotation_matrix(T_model_a, T_model_b) (flange b relative to

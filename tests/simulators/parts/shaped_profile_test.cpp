@@ -48,17 +48,19 @@ TEST(ShapedProfile, SectionIsTangentContinuousAndBendsTurnAsTheTruthSays) {
     }
     for (int b = 0; b < 4; ++b) {
       // The angle between the tangents of the flanges' ends next to the bend.
-      const Vec2 before = tangent_at((*path)[2 * b], true), after = tangent_at((*path)[2 * b + 2], false);
+      const Vec2 before = tangent_at((*path)[2 * b], true),
+                 after = tangent_at((*path)[2 * b + 2], false);
       EXPECT_NEAR(angle_between_deg(before, after), shaped_bend_angle_deg(hat, shape, b, y), 1e-9);
-      const double springback = shape.springback_deg[b] +
-                                shape.springback_gradient_deg_per_100mm[b] * (y - 30.0) / 100.0;
+      const double springback =
+          shape.springback_deg[b] + shape.springback_gradient_deg_per_100mm[b] * (y - 30.0) / 100.0;
       // Each curled neighbour takes half its sweep (length / radius) off the bend's turn.
       const auto sweep_deg = [&](int f) {
         const double rho = shape.curl_radius_mm[static_cast<std::size_t>(f)];
         return rho == 0.0 ? 0.0 : hat.flange_lengths_mm[static_cast<std::size_t>(f)] / rho / kDeg;
       };
       const double a = hat.bend_angles_deg[static_cast<std::size_t>(b)];
-      const double turn = a - (a > 0 ? springback : -springback) - 0.5 * (sweep_deg(b) + sweep_deg(b + 1));
+      const double turn =
+          a - (a > 0 ? springback : -springback) - 0.5 * (sweep_deg(b) + sweep_deg(b + 1));
       EXPECT_NEAR(shaped_bend_angle_deg(hat, shape, b, y), std::abs(turn), 1e-9);
     }
     // A curled wall keeps its length and lies on a circle of its radius, centred to its left
@@ -84,7 +86,8 @@ TEST(ShapedProfile, FlangeTwistMatchesTheSections) {
     const Vec2 ca = ((*a)[2 * f].end - (*a)[2 * f].start).normalized();
     const Vec2 cb = ((*b)[2 * f].end - (*b)[2 * f].start).normalized();
     // Heading change along +y (left positive) is a left-handed turn about +y.
-    const double heading_change_deg = std::atan2(ca.x() * cb.y() - ca.y() * cb.x(), ca.dot(cb)) / kDeg;
+    const double heading_change_deg =
+        std::atan2(ca.x() * cb.y() - ca.y() * cb.x(), ca.dot(cb)) / kDeg;
     EXPECT_NEAR(-heading_change_deg / kDy * 100.0, shaped_flange_twist_deg_per_100mm(hat, shape, f),
                 1e-9)
         << "flange " << f;
@@ -106,14 +109,30 @@ TEST(ShapedProfile, WithoutShapeItIsTheProducedProfile) {
   const auto produced = produced_profile(z, shape.springback_deg);
   ASSERT_TRUE(produced.ok());
   const auto distance = profile_surface_distance(*produced);
-  for (const Vec3& p : scan->points) EXPECT_NEAR(distance->closest(p).signed_distance_mm, 0.0, 1e-9);
+  for (const Vec3& p : scan->points)
+    EXPECT_NEAR(distance->closest(p).signed_distance_mm, 0.0, 1e-9);
 }
 
 TEST(ShapedProfile, RejectsShapesItCannotBuild) {
   const ProfileSpec l = l_profile(40, 30, 90, 3);
-  EXPECT_FALSE(shaped_section(l, ProfileShape{.springback_deg = {1, 2}, .springback_gradient_deg_per_100mm = {}, .curl_radius_mm = {}}, 0).ok());
-  EXPECT_FALSE(shaped_section(l, ProfileShape{.springback_deg = {95}, .springback_gradient_deg_per_100mm = {}, .curl_radius_mm = {}}, 0).ok());
-  EXPECT_FALSE(shaped_section(l, ProfileShape{.springback_deg = {}, .springback_gradient_deg_per_100mm = {}, .curl_radius_mm = {10, 0}}, 0).ok());  // 40 mm on r 10
+  EXPECT_FALSE(shaped_section(l,
+                              ProfileShape{.springback_deg = {1, 2},
+                                           .springback_gradient_deg_per_100mm = {},
+                                           .curl_radius_mm = {}},
+                              0)
+                   .ok());
+  EXPECT_FALSE(shaped_section(l,
+                              ProfileShape{.springback_deg = {95},
+                                           .springback_gradient_deg_per_100mm = {},
+                                           .curl_radius_mm = {}},
+                              0)
+                   .ok());
+  EXPECT_FALSE(shaped_section(l,
+                              ProfileShape{.springback_deg = {},
+                                           .springback_gradient_deg_per_100mm = {},
+                                           .curl_radius_mm = {10, 0}},
+                              0)
+                   .ok());  // 40 mm on r 10
   EXPECT_FALSE(simulate_shaped_scan(l, {}, {.point_count = 0}).ok());
   EXPECT_TRUE(simulate_shaped_scan(l, {}, {.point_count = 10}).ok());
 }
