@@ -313,8 +313,9 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   // analysis health; the report copies its decisions, the per-bend pass included.
   const VerdictResult verdict = decide_verdict(
       {deviation->statistics, deviation->signed_distance_mm,
-       springback ? springback->bends : std::vector<BendMeasurement>{}, std::move(*coverage),
-       fit_rms_residual_mm, fit->ambiguous, fit->orientation.ambiguity},
+       springback ? springback->bends : std::vector<BendMeasurement>{},
+       springback ? flange_shapes(springback->flanges) : std::vector<FlangeShapeSummary>{},
+       std::move(*coverage), fit_rms_residual_mm, fit->ambiguous, fit->orientation.ambiguity},
       config->verdict);
   to_proto(verdict, &report);
 

@@ -64,6 +64,31 @@ void check_bends(const VerdictInput& in, const VerdictSettings& s, VerdictResult
   }
 }
 
+void check_shape(const VerdictInput& in, const VerdictSettings& s, VerdictResult& out) {
+  if (s.max_angle_spread_deg > 0.0) {
+    for (const BendMeasurement& bend : in.bends) {
+      if (bend.stations.empty() || bend.angle_spread_deg <= s.max_angle_spread_deg) continue;
+      out.reasons.push_back(
+          "bend " + std::to_string(bend.bend_id) + " angle spread along the bend " +
+          fixed2(bend.angle_spread_deg) + " deg (" + fixed2(bend.angle_min_deg) + " to " +
+          fixed2(bend.angle_max_deg) + ") exceeds " + fixed2(s.max_angle_spread_deg) + " deg");
+    }
+  }
+  for (const FlangeShapeSummary& f : in.flanges) {
+    if (!f.measured) continue;
+    const std::string name = "flange " + std::to_string(f.flange_id);
+    if (s.max_flatness_mm > 0.0 && !(f.flatness_mm <= s.max_flatness_mm)) {
+      out.reasons.push_back(name + " flatness " + fixed2(f.flatness_mm) + " mm exceeds " +
+                            fixed2(s.max_flatness_mm) + " mm");
+    }
+    if (s.min_curl_radius_mm > 0.0 && f.curled &&
+        !(std::abs(f.curl_radius_mm) >= s.min_curl_radius_mm)) {
+      out.reasons.push_back(name + " curl radius " + fixed2(f.curl_radius_mm) +
+                            " mm is tighter than " + fixed2(s.min_curl_radius_mm) + " mm");
+    }
+  }
+}
+
 void check_health(const VerdictInput& in, const VerdictSettings& s, VerdictResult& out) {
   const FieldCoverage& field = in.field;
   if (field.model_points > 0 && !(field.coverage >= s.min_coverage)) {
@@ -88,10 +113,21 @@ void check_health(const VerdictInput& in, const VerdictSettings& s, VerdictResul
 
 }  // namespace
 
+std::vector<FlangeShapeSummary> flange_shapes(const std::vector<FlangeFit>& flanges) {
+  std::vector<FlangeShapeSummary> out;
+  out.reserve(flanges.size());
+  for (const FlangeFit& f : flanges) {
+    out.push_back({f.flange_id, f.shape.measured, f.shape.flatness_max_mm, f.shape.curled,
+                   f.shape.curl_radius_mm});
+  }
+  return out;
+}
+
 VerdictResult decide_verdict(const VerdictInput& input, const VerdictSettings& settings) {
   VerdictResult out;
   check_surface(input, settings, out);
   check_bends(input, settings, out);
+  check_shape(input, settings, out);
   check_health(input, settings, out);
   out.pass = out.reasons.empty();
   return out;

@@ -11,6 +11,9 @@
 //   bends     |springback_deg| <= the bend's limit (angle_tolerance_deg_by_bend, else
 //             angle_tolerance_deg); a bend that could not be measured fails when
 //             fail_unmeasured_bends;
+//   shape     (each off at 0) per bend the spread of its angle along the bend <=
+//             max_angle_spread_deg; per flange its flatness <= max_flatness_mm and, when it is
+//             curled, |curl radius| >= min_curl_radius_mm;
 //   health    the deformation field covers >= min_coverage of the reduced model (when a field
 //             was computed), and the global fit's residual rms to the surface (the trimmed
 //             deviation rms; not rms_final, which grows with the sample spacing) <=
@@ -44,6 +47,18 @@ struct VerdictSettings {
   double max_fit_rms_mm = 1.0;        ///< largest global fit residual rms (scan to surface)
                                       ///< that still counts as a good fit
   bool fail_unmeasured_bends = true;  ///< a bend without a measurement fails the part
+  double max_angle_spread_deg = 0.0;  ///< bend angle max - min along a bend; 0: not checked
+  double min_curl_radius_mm = 0.0;    ///< least |curl radius| of a curled flange; 0: not checked
+  double max_flatness_mm = 0.0;       ///< largest flange flatness (max distance); 0: not checked
+};
+
+/// What the shape rules need of one flange (springback stage, FlangeFit::shape).
+struct FlangeShapeSummary {
+  int flange_id = -1;
+  bool measured = false;
+  double flatness_mm = 0.0;  ///< max distance from its plane
+  bool curled = false;
+  double curl_radius_mm = 0.0;  ///< signed; meaningful when curled
 };
 
 /// How much of the reduced model the deformation field covers (matching stage).
@@ -60,6 +75,7 @@ struct VerdictInput {
   std::span<const double> signed_distance_mm{};  ///< deviation stage, for the share out of
                                                  ///< tolerance; may be empty
   std::vector<BendMeasurement> bends{};          ///< springback stage, in report order
+  std::vector<FlangeShapeSummary> flanges{};     ///< springback stage, for the shape rules
   FieldCoverage field{};                         ///< deformation field stage
   double fit_rms_residual_mm = 0.0;              ///< global fit: trimmed deviation rms, mm
   bool orientation_ambiguous = false;            ///< global fit: two orientations fit alike
@@ -80,6 +96,9 @@ struct VerdictResult {
   double fraction_out_of_tolerance = 0.0;  ///< share of signed_distance_mm with |d| > limit
   std::vector<BendVerdict> bends{};        ///< one per input bend, in the same order
 };
+
+/// The shape summaries of the springback stage's flanges.
+std::vector<FlangeShapeSummary> flange_shapes(const std::vector<FlangeFit>& flanges);
 
 /// Decides pass/fail from the stage results.
 VerdictResult decide_verdict(const VerdictInput& input, const VerdictSettings& settings = {});

@@ -109,6 +109,21 @@ Expected<SpringbackSettings> from_proto(const v1::SpringbackSettings& m) {
     s.local_fit.max_correspondence_distance_mm = m.max_correspondence_distance_mm();
     s.assignment_distance_mm = m.max_correspondence_distance_mm();
   }
+  if (m.has_station_spacing_mm()) {
+    if (!in_range(m.station_spacing_mm(), 1.0, 10000.0))
+      return bad("springback.station_spacing_mm", m.station_spacing_mm(), "1 to 10000");
+    s.shape.station_spacing_mm = m.station_spacing_mm();
+  }
+  if (m.has_min_stations()) {
+    if (m.min_stations() < 1 || m.min_stations() > 1000)
+      return bad("springback.min_stations", m.min_stations(), "1 to 1000");
+    s.shape.min_stations = m.min_stations();
+  }
+  if (m.has_min_curl_sagitta_mm()) {
+    if (!in_range(m.min_curl_sagitta_mm(), 0.0, 100.0))
+      return bad("springback.min_curl_sagitta_mm", m.min_curl_sagitta_mm(), "0 to 100");
+    s.shape.flange.min_curl_sagitta_mm = m.min_curl_sagitta_mm();
+  }
   if (auto error = validate(s.local_fit, "settings: springback.")) return *error;
   return s;
 }
@@ -151,6 +166,9 @@ void to_proto(const SpringbackSettings& s, v1::SpringbackSettings* m) {
   m->set_bend_margin_mm(s.bend_margin_mm);
   m->set_max_iterations(s.local_fit.max_iterations);
   m->set_max_correspondence_distance_mm(s.local_fit.max_correspondence_distance_mm);
+  m->set_station_spacing_mm(s.shape.station_spacing_mm);
+  m->set_min_stations(s.shape.min_stations);
+  m->set_min_curl_sagitta_mm(s.shape.flange.min_curl_sagitta_mm);
 }
 
 }  // namespace springscan::analysis

@@ -1,5 +1,7 @@
 #include "analysis/messages/springback_proto.hpp"
 
+#include <cmath>
+
 namespace springscan::analysis {
 namespace {
 
@@ -7,6 +9,39 @@ void to_proto(const Vec3& v, v1::Vec3& out) {
   out.set_x(v.x());
   out.set_y(v.y());
   out.set_z(v.z());
+}
+
+// The flange's shape figures; curl and twist only where they are defined.
+void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
+  const FlangeShape& shape = flange.shape;
+  s.set_shape_measured(shape.measured);
+  if (!shape.measured) return;
+  s.set_flatness_mm(shape.flatness_max_mm);
+  s.set_flatness_rms_mm(shape.flatness_rms_mm);
+  if (shape.curled && std::isfinite(shape.curl_radius_mm))
+    s.set_curl_radius_mm(shape.curl_radius_mm);
+  if (flange.has_bend_line) s.set_twist_deg_per_100mm(shape.twist_deg_per_100mm);
+}
+
+// The angle along the bend, the end-tangent definition and the measured radius.
+void bend_shape_to_proto(const BendMeasurement& m, v1::Bend& b) {
+  if (m.zone.fitted) {
+    b.set_measured_radius_mm(m.measured_radius_mm);
+    b.set_zone_rms_mm(m.zone.rms_mm);
+  }
+  if (!m.measured) return;
+  b.set_plane_angle_deg(m.plane_angle_deg);
+  b.set_end_tangents(m.end_tangents);
+  for (const BendStation& station : m.stations) {
+    v1::BendStation& out = *b.add_angle_along_bend();
+    out.set_position_mm(station.position_mm);
+    out.set_angle_deg(station.angle_deg);
+    out.set_springback_deg(station.springback_deg);
+  }
+  b.set_angle_min_deg(m.angle_min_deg);
+  b.set_angle_max_deg(m.angle_max_deg);
+  b.set_angle_spread_deg(m.angle_spread_deg);
+  b.set_angle_twist_deg(m.angle_twist_deg);
 }
 
 }  // namespace
@@ -32,6 +67,7 @@ void fill_springback_report(const SpringbackResult& result, v1::InspectionReport
     s.set_points(static_cast<std::int64_t>(flange.indices.size()));
     if (flange.fitted) to_proto(flange.fit, *s.mutable_local_fit());
     s.set_kind("flange");
+    shape_to_proto(flange, s);
   }
   for (const BendMeasurement& m : result.bends) {
     v1::Bend& b = *report.add_bends();
@@ -44,7 +80,8 @@ void fill_springback_report(const SpringbackResult& result, v1::InspectionReport
     b.set_segment_b(m.flange_b);
     for (int face : m.face_ids) b.add_cad_faces(face);
     b.set_measured(m.measured);  // pass and angle_tolerance_deg: the verdict (verdict_proto.hpp)
-    if (!m.measured) continue;   // angles stay unset (0) when nothing was measured
+    bend_shape_to_proto(m, b);
+    if (!m.measured) continue;  // angles stay unset (0) when nothing was measured
     b.set_measured_angle_deg(m.measured_angle_deg);
     b.set_springback_deg(m.springback_deg);
   }

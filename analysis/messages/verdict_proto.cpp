@@ -24,6 +24,12 @@ std::optional<Error> check_angle_tolerance_deg(const std::string& field, double 
   return bad(field, deg, "0 < deg <= 180");
 }
 
+// Shape tolerances: 0 switches the rule off, so 0 is allowed.
+std::optional<Error> check_shape_limit(const std::string& field, double value) {
+  if (value >= 0.0 && value <= 1e6) return std::nullopt;
+  return bad(field, value, "0 (off) to 1e6");
+}
+
 }  // namespace
 
 Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
@@ -55,6 +61,19 @@ Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
     }
     s.max_fit_rms_mm = m.max_fit_rms_mm();
   }
+  if (m.has_max_angle_spread_deg()) {
+    if (auto e = check_shape_limit("verdict.max_angle_spread_deg", m.max_angle_spread_deg()))
+      return *e;
+    s.max_angle_spread_deg = m.max_angle_spread_deg();
+  }
+  if (m.has_min_curl_radius_mm()) {
+    if (auto e = check_shape_limit("verdict.min_curl_radius_mm", m.min_curl_radius_mm())) return *e;
+    s.min_curl_radius_mm = m.min_curl_radius_mm();
+  }
+  if (m.has_max_flatness_mm()) {
+    if (auto e = check_shape_limit("verdict.max_flatness_mm", m.max_flatness_mm())) return *e;
+    s.max_flatness_mm = m.max_flatness_mm();
+  }
   return s;
 }
 
@@ -77,6 +96,9 @@ void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
                                  : v1::VerdictSettings::P95);
   m->set_min_coverage(s.min_coverage);
   m->set_max_fit_rms_mm(s.max_fit_rms_mm);
+  m->set_max_angle_spread_deg(s.max_angle_spread_deg);
+  m->set_min_curl_radius_mm(s.min_curl_radius_mm);
+  m->set_max_flatness_mm(s.max_flatness_mm);
 }
 
 void to_proto(const VerdictResult& verdict, v1::InspectionReport* report) {

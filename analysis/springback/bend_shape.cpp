@@ -24,19 +24,19 @@ const Bend* first_bend_of(const PartSegmentation& seg, int flange_id) {
 // Flange f's shape in the frame of its bend line.
 void fit_flange_shape_of(const PartSegmentation& seg, const PointCloud& scan,
                          const BendShapeSettings& st, std::size_t f, SpringbackResult& result) {
-    const Flange& flange = seg.flanges[f];
-    FlangeFit& fit = result.flanges[f];
-    const Bend* bend = first_bend_of(seg, flange.id);
-    fit.has_bend_line = bend != nullptr;
-    const Vec3 along = bend ? bend->axis_direction : flange.normal.unitOrthogonal();
-    const FlangeFrame frame = flange_frame(scan, fit.indices, flange.normal, along);
-    fit.shape = fit_flange_shape(scan, fit.indices, frame, st.flange);
-    if (!fit.has_bend_line) {  // no direction across: a curl radius or a twist means nothing
-      fit.shape.curled = false;
-      fit.shape.surface.A = 0.0;
-      fit.shape.curl_radius_mm = std::numeric_limits<double>::infinity();
-      fit.shape.twist_deg_per_100mm = 0.0;
-    }
+  const Flange& flange = seg.flanges[f];
+  FlangeFit& fit = result.flanges[f];
+  const Bend* bend = first_bend_of(seg, flange.id);
+  fit.has_bend_line = bend != nullptr;
+  const Vec3 along = bend ? bend->axis_direction : flange.normal.unitOrthogonal();
+  const FlangeFrame frame = flange_frame(scan, fit.indices, flange.normal, along);
+  fit.shape = fit_flange_shape(scan, fit.indices, frame, st.flange);
+  if (!fit.has_bend_line) {  // no direction across: a curl radius or a twist means nothing
+    fit.shape.curled = false;
+    fit.shape.surface.A = 0.0;
+    fit.shape.curl_radius_mm = std::numeric_limits<double>::infinity();
+    fit.shape.twist_deg_per_100mm = 0.0;
+  }
 }
 
 // The flange's end normal next to the bend on the bend's concave side (the side its nominal
@@ -63,12 +63,12 @@ Vec3 axis_at(const BendMeasurement& m, double position) {
 }
 
 // Strip fits of both flanges at stations along the bend: one pass over each flange's points.
-void measure_stations(const BendContext& c, double t_lo, double t_hi,
-                      const BendShapeSettings& st, BendMeasurement& m) {
+void measure_stations(const BendContext& c, double t_lo, double t_hi, const BendShapeSettings& st,
+                      BendMeasurement& m) {
   const double length = t_hi - t_lo;
   if (!(length > 0.0) || !(st.station_spacing_mm > 0.0)) return;
-  const auto n = static_cast<std::size_t>(std::max<long>(
-      st.min_stations, std::lround(length / st.station_spacing_mm)));
+  const auto n = static_cast<std::size_t>(
+      std::max<long>(st.min_stations, std::lround(length / st.station_spacing_mm)));
   const double window = length / static_cast<double>(n);
   const auto centre = [&](std::size_t k) { return t_lo + (static_cast<double>(k) + 0.5) * window; };
   const auto strips = [&](const FlangeFit& f) {
@@ -94,8 +94,7 @@ void measure_stations(const BendContext& c, double t_lo, double t_hi,
   const auto enough = static_cast<std::size_t>(std::max(st.min_points_per_station, 6));
   for (std::size_t k = 0; k < n; ++k) {
     FlangeSurface fa, fb;
-    if (sa[k].points() < enough || sb[k].points() < enough || !sa[k].solve(fa) ||
-        !sb[k].solve(fb))
+    if (sa[k].points() < enough || sb[k].points() < enough || !sa[k].solve(fa) || !sb[k].solve(fb))
       continue;
     const Vec3 near = axis_at(m, centre(k));
     const Vec3 na = concave_end_normal(c.fa, c.bend, c.a.shape, fa, near);
@@ -160,8 +159,7 @@ std::vector<std::uint32_t> within_wedge(const std::vector<std::uint32_t>& points
 // The cylinder of the zone: fitted to all its points, then twice to those between the
 // tangent lines of the flanges as measured.
 BendZoneFit fit_zone(const std::vector<std::uint32_t>& points, const BendContext& c,
-                     const BendMeasurement& m, const PointCloud& scan,
-                     const BendZoneSettings& st) {
+                     const BendMeasurement& m, const PointCloud& scan, const BendZoneSettings& st) {
   BendMeasurement trial = m;
   trial.zone = fit_bend_zone(scan, points, m.axis_point, m.axis_direction, st);
   if (!c.a.shape.measured || !c.b.shape.measured) return trial.zone;
@@ -176,7 +174,8 @@ std::size_t best_zone(const BendZones& zones, const std::vector<std::vector<std:
                       std::size_t bend) {
   std::size_t best = zones.zones.size();
   for (std::size_t z = 0; z < zones.zones.size(); ++z)
-    if (zones.zones[z].bend == bend && (best == zones.zones.size() || pts[z].size() > pts[best].size()))
+    if (zones.zones[z].bend == bend &&
+        (best == zones.zones.size() || pts[z].size() > pts[best].size()))
       best = z;
   return best;
 }
@@ -262,6 +261,5 @@ void measure_shapes(const PartModel& model, const PointCloud& scan, const BendZo
     measure_bend_shape(model, scan, zones, zone_points, st, b, result);
   });
 }
-
 
 }  // namespace springscan::analysis

@@ -98,8 +98,8 @@ BendZoneFit fit_bend_zone(const PointCloud& cloud, std::span<const std::uint32_t
     if (!gauss_newton_step(q, threshold, c) || !(c.r > 0.0)) return out;
     // Trim once the circle is near, and again once it has settled on the inliers.
     if (it == 2 || it == 5) threshold = std::max(st.outlier_sigmas * robust_sigma(q, c), 1e-9);
-    const double moved = std::abs(c.x - before.x) + std::abs(c.z - before.z) +
-                         std::abs(c.r - before.r);
+    const double moved =
+        std::abs(c.x - before.x) + std::abs(c.z - before.z) + std::abs(c.r - before.r);
     if (it > 5 && moved < 1e-7) break;
   }
   double sum2 = 0.0;

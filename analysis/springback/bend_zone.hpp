@@ -25,7 +25,7 @@ struct BendZoneFit {
   double radius_mm = 0.0;  ///< of the scanned side of the sheet
   double rms_mm = 0.0;     ///< of the inliers' distances from the cylinder
   std::size_t inliers = 0;
-  Vec3 axis_point = Vec3::Zero();  ///< the measured axis at the nominal axis point's position
+  Vec3 axis_point = Vec3::Zero();       ///< the measured axis at the nominal axis point's position
   Vec3 axis_direction = Vec3::UnitX();  ///< unit, along the nominal direction
   Vec3 axis_step = Vec3::UnitX();       ///< the axis' move per mm along the nominal axis
   /// The measured axis where it crosses the plane `position_mm` along the nominal axis from the

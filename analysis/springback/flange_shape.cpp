@@ -193,7 +193,8 @@ Vec3 end_normal(const FlangeFrame& frame, const FlangeSurface& f, const Vec3& ne
   double s = c.x(), h = c.z();
   if (f.A != 0.0) {
     const Eigen::Vector2d centre(-b / (2.0 * f.A), 1.0 / (2.0 * f.A));
-    const double radius = std::sqrt(std::max(0.0, b * b + 1.0 - 4.0 * f.A * k0)) / (2.0 * std::abs(f.A));
+    const double radius =
+        std::sqrt(std::max(0.0, b * b + 1.0 - 4.0 * f.A * k0)) / (2.0 * std::abs(f.A));
     const Eigen::Vector2d ray = Eigen::Vector2d(c.x(), c.z()) - centre;
     const Eigen::Vector2d foot = centre + radius * ray.normalized();
     s = foot.x();

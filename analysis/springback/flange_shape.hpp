@@ -56,11 +56,11 @@ struct FlangeShape {
   FlangeSurface surface;           ///< A = 0 unless curled
   double inlier_threshold_mm = 0;  ///< |residual| beyond this: an outlier
   std::size_t inliers = 0;
-  std::vector<Vec3> local;            ///< (s, t, h) of each point given to the fit, in order
+  std::vector<Vec3> local;           ///< (s, t, h) of each point given to the fit, in order
   std::vector<std::uint8_t> inlier;  ///< per point given to the fit (same order): 1 = inlier
-  double flatness_rms_mm = 0.0;  ///< rms distance of the inliers from their least-squares plane
-  double flatness_max_mm = 0.0;  ///< largest such distance
-  bool curled = false;           ///< false: flat within noise (curl_radius_mm is infinite)
+  double flatness_rms_mm = 0.0;      ///< rms distance of the inliers from their least-squares plane
+  double flatness_max_mm = 0.0;      ///< largest such distance
+  bool curled = false;               ///< false: flat within noise (curl_radius_mm is infinite)
   /// Signed radius of curl across the flange at its middle: positive when the centre of
   /// curvature lies on the side the CAD normal points to.
   double curl_radius_mm = std::numeric_limits<double>::infinity();

@@ -111,7 +111,8 @@ void build_section(const ProfileSpec& nominal, const ProfileShape& shape, const 
   // Right-handed about +y turns the heading clockwise in (x, z): the start point turns with it.
   const Eigen::Rotation2Dd turn(twist);
   Vec2 position = pivot + turn * (Vec2::Zero() - pivot);
-  double direction = twist;
+  // The first flange starts turned back by half its curl, so its chord keeps its direction too.
+  double direction = twist - 0.5 * curl_sweep_rad(nominal, shape, 0);
   const std::size_t n = nominal.flange_lengths_mm.size();
   for (std::size_t i = 0; i < n; ++i) {
     const double sweep = curl_sweep_rad(nominal, shape, i);
@@ -179,7 +180,8 @@ Expected<PointCloud> simulate_shaped_scan(const ProfileSpec& nominal, const Prof
                 " outside [1, 50000000]");
   if (settings.missing_fraction != 0.0 || !(settings.noise_sigma_mm >= 0.0) ||
       !(settings.outlier_fraction >= 0.0 && settings.outlier_fraction <= 0.5))
-    return fail("simulate_shaped_scan: missing_fraction must be 0, noise >= 0, outliers in [0, 0.5]");
+    return fail(
+        "simulate_shaped_scan: missing_fraction must be 0, noise >= 0, outliers in [0, 0.5]");
   const Vec2 pivot = path_middle(nominal);
   std::mt19937_64 rng(settings.seed);
   std::uniform_real_distribution<double> uy(0.0, nominal.width_mm), unit(0.0, 1.0);

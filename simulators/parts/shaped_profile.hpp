@@ -4,8 +4,9 @@
 // ProfileSpec (sheet_profile.hpp) is produced with
 //   - springback per bend that varies linearly along the bend line (y),
 //   - sidewall curl: a flange bent to a constant signed radius across its width (its length
-//     kept), the turns of the bends next to it reduced by half its sweep each, so the flange's
-//     chord keeps its nominal direction (the curled wall bows out between its nominal ends),
+//     kept), the turns of the bends next to it reduced by half its sweep each (a first flange
+//     starts turned back by half its sweep), so every flange's chord keeps its nominal
+//     direction (a curled wall bows out between its nominal ends),
 //   - twist: the whole section turning linearly about the y axis along y.
 // The section at every y is built exactly (lines and arcs), so every figure below is known in
 // closed form: the angle each bend turns at any y, each flange's curl radius and twist rate.

@@ -155,5 +155,41 @@ TEST(Verdict, EveryFailingRuleIsListed) {
   EXPECT_EQ(v.reasons.size(), 5u);
 }
 
+TEST(Verdict, ShapeRulesAreOffByDefaultAndNameTheirNumbers) {
+  VerdictInput in = good_input();
+  in.bends[1].stations = {{-20, 89.5, 0.5}, {0, 89.6, 0.4}, {20, 90.3, -0.3}};
+  in.bends[1].angle_min_deg = 89.5;
+  in.bends[1].angle_max_deg = 90.3;
+  in.bends[1].angle_spread_deg = 0.8;
+  in.flanges = {{.flange_id = 0,
+                 .measured = true,
+                 .flatness_mm = 0.09,
+                 .curled = false,
+                 .curl_radius_mm = 0.0},
+                {.flange_id = 1,
+                 .measured = true,
+                 .flatness_mm = 1.4,
+                 .curled = true,
+                 .curl_radius_mm = -180.0}};
+  EXPECT_TRUE(decide_verdict(in).pass) << "every shape limit is off by default";
+  VerdictSettings s;
+  s.max_angle_spread_deg = 0.5;
+  s.min_curl_radius_mm = 250.0;
+  s.max_flatness_mm = 1.0;
+  const auto v = decide_verdict(in, s);
+  EXPECT_FALSE(v.pass);
+  EXPECT_TRUE(has_reason(v, "bend 1 angle spread along the bend 0.80 deg (89.50 to 90.30)"));
+  EXPECT_TRUE(has_reason(v, "flange 1 flatness 1.40 mm exceeds 1.00 mm"));
+  EXPECT_TRUE(has_reason(v, "flange 1 curl radius -180.00 mm is tighter than 250.00 mm"));
+  EXPECT_FALSE(has_reason(v, "flange 0"));
+  EXPECT_FALSE(has_reason(v, "bend 0 angle spread"));
+  EXPECT_TRUE(v.bends[1].pass) << "the bend's own pass is its springback";
+  // Within the limits: no reason.
+  s.max_angle_spread_deg = 0.9;
+  s.min_curl_radius_mm = 150.0;
+  s.max_flatness_mm = 1.5;
+  EXPECT_TRUE(decide_verdict(in, s).pass);
+}
+
 }  // namespace
 }  // namespace springscan::analysis

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "analysis/messages/verdict_proto.hpp"
+#include "simulators/parts/shaped_profile.hpp"
 #include "simulators/parts/sheet_part.hpp"
 
 namespace springscan::analysis {
@@ -43,6 +44,41 @@ TEST(SpringbackProto, ReportHoldsTheBendTableAndSegments) {
   EXPECT_EQ(b0.segment_b(), 1);
   EXPECT_EQ(b0.cad_faces(0), 1);
   EXPECT_NEAR(std::abs(b0.axis_direction().y()), 1.0, 1e-12);
+}
+
+// The shape figures: stations, radius, end tangents, and per flange flatness, curl, twist;
+// curl absent where the flange is flat.
+TEST(SpringbackProto, ReportHoldsTheShapeFigures) {
+  const ProfileSpec spec = u_profile(30, 40, 90, 3);
+  ProfileShape shape;
+  shape.springback_deg = {1.0, 0.5};
+  shape.curl_radius_mm = {200, 0, 0};
+  const auto model = profile_part_model(spec, {.sample_count = 10000});
+  ASSERT_TRUE(model.ok());
+  const auto scan = simulate_shaped_scan(spec, shape, {.point_count = 30000});
+  ASSERT_TRUE(scan.ok());
+  const auto result = measure_springback(*model, *scan);
+  ASSERT_TRUE(result.ok());
+  v1::InspectionReport report;
+  fill_springback_report(*result, report);
+  ASSERT_EQ(report.bends_size(), 2);
+  const v1::Bend& b0 = report.bends(0);
+  EXPECT_TRUE(b0.end_tangents());
+  EXPECT_FALSE(report.bends(1).end_tangents());
+  EXPECT_EQ(b0.angle_along_bend_size(), 3);  // 60 mm wide: the minimum of 3 stations
+  EXPECT_EQ(b0.angle_along_bend(1).angle_deg(), result->bends[0].stations[1].angle_deg);
+  EXPECT_NEAR(b0.angle_spread_deg(), b0.angle_max_deg() - b0.angle_min_deg(), 1e-12);
+  ASSERT_TRUE(b0.has_measured_radius_mm());
+  EXPECT_NEAR(b0.measured_radius_mm(), 3.0, 0.1);
+  EXPECT_NE(b0.plane_angle_deg(), b0.measured_angle_deg());
+  ASSERT_EQ(report.segments_size(), 3);
+  EXPECT_TRUE(report.segments(0).shape_measured());
+  ASSERT_TRUE(report.segments(0).has_curl_radius_mm());
+  EXPECT_NEAR(report.segments(0).curl_radius_mm(), 200.0, 6.0);
+  EXPECT_FALSE(report.segments(1).has_curl_radius_mm());
+  EXPECT_TRUE(report.segments(1).has_twist_deg_per_100mm());
+  EXPECT_NEAR(report.segments(1).flatness_rms_mm(), 0.02, 0.005);
+  EXPECT_GT(report.segments(0).flatness_mm(), 0.3);  // 30 mm curled to 200 mm bows 0.56 mm
 }
 
 }  // namespace
