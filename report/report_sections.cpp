@@ -29,6 +29,52 @@ std::string status_cell(const char* css, const char* word) {
   return std::string("<td><span class='status ") + css + "'>" + word + "</span></td>";
 }
 
+// A small line of the angle along the bend: stations left to right, min to max bottom to top
+// (a flat line when the spread is below 0.01 degrees).
+std::string angle_sparkline(const v1::Bend& bend) {
+  constexpr double kW = 72.0, kH = 18.0, kPad = 2.0;
+  const auto& st = bend.angle_along_bend();
+  if (st.size() < 2) return "";
+  const double x0 = st.begin()->position_mm(), x1 = st.rbegin()->position_mm();
+  const double lo = bend.angle_min_deg(), span = bend.angle_max_deg() - bend.angle_min_deg();
+  std::string points;
+  for (const auto& s : st) {
+    const double x = kPad + (kW - 2 * kPad) * (s.position_mm() - x0) / std::max(x1 - x0, 1e-9);
+    const double y =
+        span < 0.01 ? 0.5 * kH : kH - kPad - (kH - 2 * kPad) * (s.angle_deg() - lo) / span;
+    // Appended piece by piece (g++ 12 -Wrestrict false positive on "literal" + std::string).
+    if (!points.empty()) points += ' ';
+    points += fixed(x, 1);
+    points += ',';
+    points += fixed(y, 1);
+  }
+  return "<svg class='spark' width='72' height='18' viewBox='0 0 72 18' role='img' "
+         "aria-label='angle along the bend'><polyline fill='none' stroke='currentColor' "
+         "stroke-width='1.2' points='" +
+         points + "'/></svg>";
+}
+
+// The angle along the bend: min to max, the spread and its little plot.
+std::string along_cell(const v1::Bend& bend) {
+  if (!bend.measured() || bend.angle_along_bend_size() == 0) return "<td class='num'>&mdash;</td>";
+  return "<td class='num'>" + fixed(bend.angle_min_deg(), 2) + " &ndash; " +
+         fixed(bend.angle_max_deg(), 2) + "<br>spread " + fixed(bend.angle_spread_deg(), 2) + " " +
+         angle_sparkline(bend) + "</td>";
+}
+
+// Flatness (max, rms), curl radius ("flat" within noise) and twist of a flange.
+std::string shape_cells(const v1::Segment& segment) {
+  if (!segment.shape_measured())
+    return "<td class='num'>&mdash;</td><td class='num'>&mdash;</td><td class='num'>&mdash;</td>";
+  return "<td class='num'>" + fixed(segment.flatness_mm(), 3) + " (rms " +
+         fixed(segment.flatness_rms_mm(), 3) + ")</td><td class='num'>" +
+         (segment.has_curl_radius_mm() ? signed_fixed(segment.curl_radius_mm(), 0) : "flat") +
+         "</td><td class='num'>" +
+         (segment.has_twist_deg_per_100mm() ? signed_fixed(segment.twist_deg_per_100mm(), 3)
+                                            : "&mdash;") +
+         "</td>";
+}
+
 }  // namespace
 
 std::string header_html(const v1::InspectionReport& report) {
@@ -73,7 +119,8 @@ std::string bend_table(const v1::InspectionReport& report) {
   std::string html =
       "<table class='bends'><tr><th>Bend</th><th class='num'>Nominal [\u00b0]</th>"
       "<th class='num'>Measured [\u00b0]</th><th class='num'>Springback [\u00b0]</th>"
-      "<th class='num'>Tolerance [\u00b1\u00b0]</th><th class='num'>Radius [mm]</th>"
+      "<th class='num'>Tolerance [\u00b1\u00b0]</th><th class='num'>Along the bend [\u00b0]</th>"
+      "<th class='num'>Radius [mm]</th><th class='num'>Measured radius [mm]</th>"
       "<th class='num'>Flanges</th><th>Result</th></tr>";
   for (const auto& bend : report.bends()) {
     const bool measured = bend.measured();
@@ -81,11 +128,15 @@ std::string bend_table(const v1::InspectionReport& report) {
     html += std::string("<tr class='") + row + "' id='bend-" + std::to_string(bend.id()) +
             "'><td><b>B" + std::to_string(bend.id()) + "</b></td><td class='num'>" +
             fixed(bend.nominal_angle_deg(), 2) + "</td><td class='num'>" +
-            (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") + "</td><td class='num'>" +
+            (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") +
+            (measured && bend.end_tangents() ? "&dagger;" : "") + "</td><td class='num'>" +
             (measured ? signed_fixed(bend.springback_deg(), 2) : "&mdash;") +
-            "</td><td class='num'>" + fixed(bend.angle_tolerance_deg(), 2) +
-            "</td><td class='num'>" + fixed(bend.radius_mm(), 1) + "</td><td class='num'>" +
-            std::to_string(bend.segment_a()) + " / " + std::to_string(bend.segment_b()) + "</td>" +
+            "</td><td class='num'>" + fixed(bend.angle_tolerance_deg(), 2) + "</td>" +
+            along_cell(bend) + "<td class='num'>" + fixed(bend.radius_mm(), 1) +
+            "</td><td class='num'>" +
+            (bend.has_measured_radius_mm() ? fixed(bend.measured_radius_mm(), 2) : "&mdash;") +
+            "</td><td class='num'>" + std::to_string(bend.segment_a()) + " / " +
+            std::to_string(bend.segment_b()) + "</td>" +
             (!measured     ? status_cell("nm", "NOT MEASURED")
              : bend.pass() ? status_cell("ok", "PASS")
                            : status_cell("ng", "FAIL")) +
@@ -93,14 +144,18 @@ std::string bend_table(const v1::InspectionReport& report) {
   }
   return html +
          "</table><p class='note'>Springback = nominal &minus; measured angle: positive "
-         "when the bend opened up.</p>";
+         "when the bend opened up. Along the bend: the angle at stations along the bend line "
+         "(least to greatest, their spread). &dagger; Next to a curled flange: the angle "
+         "between the tangent planes at the flanges' ends next to the bend (NUMISHEET'93), not "
+         "between planes through the whole flanges.</p>";
 }
 
 std::string segment_table(const v1::InspectionReport& report) {
   std::string html =
       "<table class='segments'><tr><th>Flange</th><th class='num'>CAD faces</th>"
       "<th class='num'>Points</th><th class='num'>Local fit RMS [mm]</th>"
-      "<th class='num'>Iterations</th><th>Converged</th></tr>";
+      "<th class='num'>Iterations</th><th>Converged</th><th class='num'>Flatness [mm]</th>"
+      "<th class='num'>Curl radius [mm]</th><th class='num'>Twist [\u00b0/100 mm]</th></tr>";
   for (const auto& segment : report.segments()) {
     std::string faces;
     for (int f : segment.cad_faces()) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
@@ -108,7 +163,8 @@ std::string segment_table(const v1::InspectionReport& report) {
             escape_html(faces) + "</td><td class='num'>" + count(segment.points()) +
             "</td><td class='num'>" + fixed(segment.local_fit().rms(), 3) +
             "</td><td class='num'>" + std::to_string(segment.local_fit().iterations()) +
-            "</td><td>" + yes_no(segment.local_fit().converged()) + "</td></tr>";
+            "</td><td>" + yes_no(segment.local_fit().converged()) + "</td>" + shape_cells(segment) +
+            "</tr>";
   }
   return html + "</table>";
 }

@@ -71,6 +71,7 @@ svg.chart { max-width: 100%; height: auto; }
 svg.colorbar { width: 100%; height: auto; }
 svg.colorbar text { font-size: 13px; }
 table.bends { break-inside: avoid; page-break-inside: avoid; }
+svg.spark { vertical-align: middle; color: var(--muted); }
 .colorbar-wrap { margin: 2px 0 8px; }
 .bar { display: inline-block; height: 9px; background: #6d88b5; vertical-align: middle;
        -webkit-print-color-adjust: exact; print-color-adjust: exact; }

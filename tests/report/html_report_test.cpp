@@ -74,6 +74,21 @@ TEST_F(HtmlReport, HasOneRowPerBendWithItsNumbersAndResult) {
     EXPECT_NE(html_->find(">B" + std::to_string(id) + "</text>"), std::string::npos) << id;
 }
 
+TEST_F(HtmlReport, ShowsTheAngleAlongTheBendAndTheFlangeShape) {
+  const std::string b2 = bend_row(*html_, 2), b1 = bend_row(*html_, 1), b3 = bend_row(*html_, 3);
+  EXPECT_NE(b2.find(">87.30 &ndash; 87.90<br>spread 0.60 <svg class='spark'"), std::string::npos)
+      << b2;
+  EXPECT_NE(b2.find("<polyline"), std::string::npos) << b2;
+  EXPECT_NE(b2.find(">4.07<"), std::string::npos) << b2;  // measured radius
+  EXPECT_NE(b1.find("<td class='num'>&mdash;</td>"), std::string::npos) << "no stations: " << b1;
+  EXPECT_NE(b3.find("&dagger;"), std::string::npos) << b3;  // end-tangent angle
+  EXPECT_EQ(b2.find("&dagger;"), std::string::npos) << b2;
+  // The flange table: flatness with its rms, curl ("flat" when none), twist.
+  EXPECT_NE(html_->find(">1.234 (rms 0.020)</td><td class='num'>-240</td><td class='num'>+0.125<"),
+            std::string::npos);
+  EXPECT_NE(html_->find(">0.081 (rms 0.020)</td><td class='num'>flat</td>"), std::string::npos);
+}
+
 TEST_F(HtmlReport, EscapesEveryTextFromTheReport) {
   EXPECT_NE(html_->find("HAT-7 &lt;rev&amp;B&gt;"), std::string::npos);
   EXPECT_EQ(html_->find("HAT-7 <rev"), std::string::npos);

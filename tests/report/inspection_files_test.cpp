@@ -109,6 +109,36 @@ TEST(ReportFiles, RoundTripAllFiles) {
   fs::remove_all(dir.parent_path());
 }
 
+// report.json carries the shape figures under their proto names; a flat flange has no curl.
+TEST(ReportFiles, JsonCarriesTheShapeFigures) {
+  v1::InspectionReport r = sample_outcome().report;
+  auto* station = r.mutable_bends(0)->add_angle_along_bend();
+  station->set_position_mm(-20.0);
+  station->set_angle_deg(88.25);
+  r.mutable_bends(0)->set_angle_spread_deg(0.5);
+  r.mutable_bends(0)->set_measured_radius_mm(4.03);
+  auto* curled = r.add_segments();
+  curled->set_shape_measured(true);
+  curled->set_flatness_mm(1.5);
+  curled->set_curl_radius_mm(-240.0);
+  curled->set_twist_deg_per_100mm(0.25);
+  auto* flat = r.add_segments();
+  flat->set_id(1);
+  flat->set_shape_measured(true);
+  const auto json = report_to_json(r);
+  ASSERT_TRUE(json) << json.message();
+  for (const char* field :
+       {"\"angle_along_bend\"", "\"position_mm\": -20", "\"angle_deg\": 88.25",
+        "\"angle_spread_deg\": 0.5", "\"measured_radius_mm\": 4.03", "\"flatness_mm\": 1.5",
+        "\"curl_radius_mm\": -240", "\"twist_deg_per_100mm\": 0.25", "\"end_tangents\": false"})
+    EXPECT_NE(json->find(field), std::string::npos) << field;
+  EXPECT_EQ(json->find("\"curl_radius_mm\""), json->rfind("\"curl_radius_mm\"")) << "flat: absent";
+  const auto back = report_from_json(*json);
+  ASSERT_TRUE(back) << back.message();
+  EXPECT_TRUE(back->segments(0).has_curl_radius_mm());
+  EXPECT_FALSE(back->segments(1).has_curl_radius_mm());
+}
+
 TEST(ReportFiles, ErrorsNameTheFile) {
   const fs::path dir = fresh_dir("springscan_report_errors");
   fs::create_directories(dir);

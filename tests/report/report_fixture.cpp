@@ -86,6 +86,19 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
     b->set_pass(std::abs(springback[i]) <= 1.0);
     b->set_segment_a(i);
     b->set_segment_b(i + 1);
+    if (i == 1) {  // B2: its angle along the bend, opening towards one end
+      for (int k = 0; k < 3; ++k) {
+        auto* station = b->add_angle_along_bend();
+        station->set_position_mm(-20.0 + 20.0 * k);
+        station->set_springback_deg(springback[i] + 0.3 * (k - 1));
+        station->set_angle_deg(b->nominal_angle_deg() - station->springback_deg());
+      }
+      b->set_angle_min_deg(b->nominal_angle_deg() - springback[i] - 0.3);
+      b->set_angle_max_deg(b->nominal_angle_deg() - springback[i] + 0.3);
+      b->set_angle_spread_deg(0.6);
+      b->set_measured_radius_mm(e.radius_mm + 0.07);
+    }
+    b->set_end_tangents(i == 2);  // B3: next to the curled wall S3
   }
   for (int s = 0; s < 5; ++s) {
     auto* seg = r.add_segments();
@@ -93,6 +106,11 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
     seg->add_cad_faces(2 * s);
     seg->set_points(1000 + 10 * s);
     seg->mutable_local_fit()->set_rms(0.05 + 0.01 * s);
+    seg->set_shape_measured(s != 4);
+    seg->set_flatness_mm(s == 3 ? 1.234 : 0.081);
+    seg->set_flatness_rms_mm(0.02);
+    if (s == 3) seg->set_curl_radius_mm(-240.0);
+    seg->set_twist_deg_per_100mm(0.125);
   }
   // Compensation: opposite of the deviation field at 60 control points along the profile.
   for (int k = 0; k < 60; ++k) {
