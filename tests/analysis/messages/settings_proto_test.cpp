@@ -120,5 +120,40 @@ TEST(SettingsProto, RoundTripOfTheSettingsInForce) {
   EXPECT_EQ(back->icp.trimmed_fraction, fit.icp.trimmed_fraction);
 }
 
+// The shape settings: stations and curl in springback, the shape limits in verdict (off,
+// i.e. 0, by default; negative refused, 0 accepted).
+TEST(SettingsProto, ShapeSettingsOverrideAndAreChecked) {
+  const auto m = parse(R"(
+    springback { station_spacing_mm: 25 min_stations: 5 min_curl_sagitta_mm: 0.05 }
+    verdict { max_angle_spread_deg: 0.4 min_curl_radius_mm: 300 max_flatness_mm: 0.8 })");
+  const auto springback = from_proto(m.springback());
+  const auto verdict = verdict_settings_from_proto(m);
+  ASSERT_TRUE(springback && verdict);
+  EXPECT_EQ(springback->shape.station_spacing_mm, 25.0);
+  EXPECT_EQ(springback->shape.min_stations, 5);
+  EXPECT_EQ(springback->shape.flange.min_curl_sagitta_mm, 0.05);
+  EXPECT_EQ(verdict->max_angle_spread_deg, 0.4);
+  EXPECT_EQ(verdict->min_curl_radius_mm, 300.0);
+  EXPECT_EQ(verdict->max_flatness_mm, 0.8);
+  const auto defaults = verdict_settings_from_proto(parse(""));
+  EXPECT_EQ(defaults->max_angle_spread_deg, 0.0);
+  EXPECT_EQ(defaults->min_curl_radius_mm, 0.0);
+  EXPECT_EQ(defaults->max_flatness_mm, 0.0);
+  EXPECT_TRUE(verdict_settings_from_proto(parse("verdict { max_flatness_mm: 0 }")));
+  EXPECT_NE(verdict_settings_from_proto(parse("verdict { min_curl_radius_mm: -1 }"))
+                .message()
+                .find("verdict.min_curl_radius_mm = -1"),
+            std::string::npos);
+  EXPECT_NE(from_proto(parse("springback { station_spacing_mm: 0 }").springback())
+                .message()
+                .find("springback.station_spacing_mm"),
+            std::string::npos);
+  EXPECT_FALSE(from_proto(parse("springback { min_stations: 0 }").springback()));
+  v1::SpringbackSettings out;
+  to_proto(*springback, &out);
+  EXPECT_EQ(out.station_spacing_mm(), 25.0);
+  EXPECT_EQ(out.min_stations(), 5);
+}
+
 }  // namespace
 }  // namespace springscan::analysis
