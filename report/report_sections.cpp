@@ -75,6 +75,16 @@ std::string shape_cells(const v1::Segment& segment) {
          "</td>";
 }
 
+// A free edge against the CAD edge: mean along the sheet and across it, with their ranges.
+std::string edge_cell(const v1::Segment& segment) {
+  if (!segment.has_edge_deviation_mm()) return "<td class='num'>&mdash;</td>";
+  const v1::EdgeDeviation& e = segment.edge_deviation_mm();
+  return "<td class='num'>in-plane " + signed_fixed(e.in_plane_mean(), 2) + " (" +
+         signed_fixed(e.in_plane_min(), 2) + " to " + signed_fixed(e.in_plane_max(), 2) +
+         ")<br>across " + signed_fixed(e.across_mean(), 2) + " (" +
+         signed_fixed(e.across_min(), 2) + " to " + signed_fixed(e.across_max(), 2) + ")</td>";
+}
+
 }  // namespace
 
 std::string header_html(const v1::InspectionReport& report) {
@@ -155,7 +165,8 @@ std::string segment_table(const v1::InspectionReport& report) {
       "<table class='segments'><tr><th>Flange</th><th class='num'>CAD faces</th>"
       "<th class='num'>Points</th><th class='num'>Local fit RMS [mm]</th>"
       "<th class='num'>Iterations</th><th>Converged</th><th class='num'>Flatness [mm]</th>"
-      "<th class='num'>Curl radius [mm]</th><th class='num'>Twist [\u00b0/100 mm]</th></tr>";
+      "<th class='num'>Curl radius [mm]</th><th class='num'>Twist [\u00b0/100 mm]</th>"
+      "<th class='num'>Free edge [mm]</th></tr>";
   for (const auto& segment : report.segments()) {
     std::string faces;
     for (int f : segment.cad_faces()) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
@@ -164,7 +175,7 @@ std::string segment_table(const v1::InspectionReport& report) {
             "</td><td class='num'>" + fixed(segment.local_fit().rms(), 3) +
             "</td><td class='num'>" + std::to_string(segment.local_fit().iterations()) +
             "</td><td>" + yes_no(segment.local_fit().converged()) + "</td>" + shape_cells(segment) +
-            "</tr>";
+            edge_cell(segment) + "</tr>";
   }
   return html + "</table>";
 }

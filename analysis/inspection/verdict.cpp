@@ -77,6 +77,13 @@ void check_shape(const VerdictInput& in, const VerdictSettings& s, VerdictResult
   for (const FlangeShapeSummary& f : in.flanges) {
     if (!f.measured) continue;
     const std::string name = "flange " + std::to_string(f.flange_id);
+    if (s.max_edge_deviation_mm > 0.0 && f.edge_measured &&
+        !(std::max(std::abs(f.edge_in_plane_mm), std::abs(f.edge_across_mm)) <=
+          s.max_edge_deviation_mm)) {
+      out.reasons.push_back(name + " free edge off by " + fixed2(f.edge_in_plane_mm) +
+                            " mm in-plane, " + fixed2(f.edge_across_mm) + " mm across (limit " +
+                            fixed2(s.max_edge_deviation_mm) + " mm)");
+    }
     if (s.max_flatness_mm > 0.0 && !(f.flatness_mm <= s.max_flatness_mm)) {
       out.reasons.push_back(name + " flatness " + fixed2(f.flatness_mm) + " mm exceeds " +
                             fixed2(s.max_flatness_mm) + " mm");
@@ -117,8 +124,11 @@ std::vector<FlangeShapeSummary> flange_shapes(const std::vector<FlangeFit>& flan
   std::vector<FlangeShapeSummary> out;
   out.reserve(flanges.size());
   for (const FlangeFit& f : flanges) {
+    const auto larger = [](double a, double b) { return std::abs(a) >= std::abs(b) ? a : b; };
     out.push_back({f.flange_id, f.shape.measured, f.shape.flatness_max_mm, f.shape.curled,
-                   f.shape.curl_radius_mm});
+                   f.shape.curl_radius_mm, f.edge.measured,
+                   larger(f.edge.in_plane_min_mm, f.edge.in_plane_max_mm),
+                   larger(f.edge.across_min_mm, f.edge.across_max_mm)});
   }
   return out;
 }

@@ -13,7 +13,8 @@
 //             fail_unmeasured_bends;
 //   shape     (each off at 0) per bend the spread of its angle along the bend <=
 //             max_angle_spread_deg; per flange its flatness <= max_flatness_mm and, when it is
-//             curled, |curl radius| >= min_curl_radius_mm;
+//             curled, |curl radius| >= min_curl_radius_mm; an end flange's free edge within
+//             max_edge_deviation_mm of the CAD edge, in-plane and across;
 //   health    the deformation field covers >= min_coverage of the reduced model (when a field
 //             was computed), and the global fit's residual rms to the surface (the trimmed
 //             deviation rms; not rms_final, which grows with the sample spacing) <=
@@ -43,13 +44,14 @@ struct VerdictSettings {
   double angle_tolerance_deg = 1.0;                                   ///< springback limit per bend
   std::map<int, double> angle_tolerance_deg_by_bend{};                ///< bend id -> its own limit
   DeviationStatistic deviation_statistic = DeviationStatistic::kP95;  ///< what is compared
-  double min_coverage = 0.9;          ///< least share of the reduced model with a field vector
-  double max_fit_rms_mm = 1.0;        ///< largest global fit residual rms (scan to surface)
-                                      ///< that still counts as a good fit
-  bool fail_unmeasured_bends = true;  ///< a bend without a measurement fails the part
-  double max_angle_spread_deg = 0.0;  ///< bend angle max - min along a bend; 0: not checked
-  double min_curl_radius_mm = 0.0;    ///< least |curl radius| of a curled flange; 0: not checked
-  double max_flatness_mm = 0.0;       ///< largest flange flatness (max distance); 0: not checked
+  double min_coverage = 0.9;           ///< least share of the reduced model with a field vector
+  double max_fit_rms_mm = 1.0;         ///< largest global fit residual rms (scan to surface)
+                                       ///< that still counts as a good fit
+  bool fail_unmeasured_bends = true;   ///< a bend without a measurement fails the part
+  double max_angle_spread_deg = 0.0;   ///< bend angle max - min along a bend; 0: not checked
+  double min_curl_radius_mm = 0.0;     ///< least |curl radius| of a curled flange; 0: not checked
+  double max_flatness_mm = 0.0;        ///< largest flange flatness (max distance); 0: not checked
+  double max_edge_deviation_mm = 0.0;  ///< largest |move| of a free edge; 0: not checked
 };
 
 /// What the shape rules need of one flange (springback stage, FlangeFit::shape).
@@ -58,7 +60,10 @@ struct FlangeShapeSummary {
   bool measured = false;
   double flatness_mm = 0.0;  ///< max distance from its plane
   bool curled = false;
-  double curl_radius_mm = 0.0;  ///< signed; meaningful when curled
+  double curl_radius_mm = 0.0;    ///< signed; meaningful when curled
+  bool edge_measured = false;     ///< an end flange's free edge was measured
+  double edge_in_plane_mm = 0.0;  ///< its in-plane move of largest magnitude (signed)
+  double edge_across_mm = 0.0;    ///< its move across of largest magnitude (signed)
 };
 
 /// How much of the reduced model the deformation field covers (matching stage).

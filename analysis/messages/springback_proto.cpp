@@ -21,6 +21,16 @@ void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
   if (shape.curled && std::isfinite(shape.curl_radius_mm))
     s.set_curl_radius_mm(shape.curl_radius_mm);
   if (flange.has_bend_line) s.set_twist_deg_per_100mm(shape.twist_deg_per_100mm);
+  if (!flange.edge.measured) return;
+  const EdgeDeviation& e = flange.edge;
+  v1::EdgeDeviation& out = *s.mutable_edge_deviation_mm();
+  out.set_strips(e.strips);
+  out.set_in_plane_mean(e.in_plane_mean_mm);
+  out.set_in_plane_min(e.in_plane_min_mm);
+  out.set_in_plane_max(e.in_plane_max_mm);
+  out.set_across_mean(e.across_mean_mm);
+  out.set_across_min(e.across_min_mm);
+  out.set_across_max(e.across_max_mm);
 }
 
 // The angle along the bend, the end-tangent definition and the measured radius.

@@ -74,6 +74,11 @@ Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
     if (auto e = check_shape_limit("verdict.max_flatness_mm", m.max_flatness_mm())) return *e;
     s.max_flatness_mm = m.max_flatness_mm();
   }
+  if (m.has_max_edge_deviation_mm()) {
+    if (auto e = check_shape_limit("verdict.max_edge_deviation_mm", m.max_edge_deviation_mm()))
+      return *e;
+    s.max_edge_deviation_mm = m.max_edge_deviation_mm();
+  }
   return s;
 }
 
@@ -99,6 +104,7 @@ void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
   m->set_max_angle_spread_deg(s.max_angle_spread_deg);
   m->set_min_curl_radius_mm(s.min_curl_radius_mm);
   m->set_max_flatness_mm(s.max_flatness_mm);
+  m->set_max_edge_deviation_mm(s.max_edge_deviation_mm);
 }
 
 void to_proto(const VerdictResult& verdict, v1::InspectionReport* report) {

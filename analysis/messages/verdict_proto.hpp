@@ -12,7 +12,7 @@ namespace springscan::analysis {
 /// VerdictSettings overrides -> VerdictSettings: verdict.tolerance_mm (0 < mm <= 1e6),
 /// angle_tolerance_deg (0 < deg <= 180), deviation_statistic, min_coverage (0 to 1),
 /// max_fit_rms_mm (> 0), the shape limits max_angle_spread_deg, min_curl_radius_mm,
-/// max_flatness_mm (0 = off, to 1e6). Errors name the field and the value.
+/// max_flatness_mm, max_edge_deviation_mm (0 = off, to 1e6). Errors name the field and the value.
 Expected<VerdictSettings> from_proto(const v1::VerdictSettings& message);
 
 /// The verdict's settings from a whole AnalysisSettings: its own section, plus

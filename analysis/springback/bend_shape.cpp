@@ -21,9 +21,17 @@ const Bend* first_bend_of(const PartSegmentation& seg, int flange_id) {
   return nullptr;
 }
 
-// Flange f's shape in the frame of its bend line.
-void fit_flange_shape_of(const PartSegmentation& seg, const PointCloud& scan,
+// The number of bends that touch the flange: an end flange has one, and a free edge opposite.
+int bends_of(const PartSegmentation& seg, int flange_id) {
+  return static_cast<int>(std::count_if(seg.bends.begin(), seg.bends.end(), [&](const Bend& b) {
+    return b.flange_a == flange_id || b.flange_b == flange_id;
+  }));
+}
+
+// Flange f's shape in the frame of its bend line, and an end flange's free edge.
+void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
                          const BendShapeSettings& st, std::size_t f, SpringbackResult& result) {
+  const PartSegmentation& seg = model.segmentation;
   const Flange& flange = seg.flanges[f];
   FlangeFit& fit = result.flanges[f];
   const Bend* bend = first_bend_of(seg, flange.id);
@@ -37,6 +45,8 @@ void fit_flange_shape_of(const PartSegmentation& seg, const PointCloud& scan,
     fit.shape.curl_radius_mm = std::numeric_limits<double>::infinity();
     fit.shape.twist_deg_per_100mm = 0.0;
   }
+  if (bend && bends_of(seg, flange.id) == 1)
+    fit.edge = measure_free_edge(model, flange, fit.shape, bend->axis_point, st.edge);
 }
 
 // The flange's end normal next to the bend on the bend's concave side (the side its nominal
@@ -255,7 +265,7 @@ void measure_shapes(const PartModel& model, const PointCloud& scan, const BendZo
   const auto& seg = model.segmentation;
   // Flanges, then bends, one task each: each writes only its own record.
   for_each_block(seg.flanges.size(), 1, threads, [&](std::size_t, std::size_t f, std::size_t) {
-    fit_flange_shape_of(seg, scan, st, f, result);
+    fit_flange_shape_of(model, scan, st, f, result);
   });
   for_each_block(seg.bends.size(), 1, threads, [&](std::size_t, std::size_t b, std::size_t) {
     measure_bend_shape(model, scan, zones, zone_points, st, b, result);

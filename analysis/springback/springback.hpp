@@ -17,6 +17,7 @@
 #include "analysis/core/part_model.hpp"
 #include "analysis/core/point_cloud.hpp"
 #include "analysis/springback/bend_zone.hpp"
+#include "analysis/springback/flange_edge.hpp"
 #include "analysis/springback/flange_shape.hpp"
 #include "analysis/springback/local_fit.hpp"
 #include "analysis/springback/relative_rotation.hpp"
@@ -26,6 +27,7 @@ namespace springscan::analysis {
 /// Beyond rigid flanges: flange shape, bend radius, angle along the bend (bend_shape.cpp).
 struct BendShapeSettings {
   FlangeShapeSettings flange;        ///< flatness, curl, twist per flange
+  FlangeEdgeSettings edge;           ///< free edge of an end flange against the CAD edge
   BendZoneSettings zone;             ///< the bend zone's cylinder (measured radius)
   double station_spacing_mm = 20.0;  ///< angle along the bend: one station per this length
   int min_stations = 3;              ///< ...and at least this many
@@ -56,6 +58,7 @@ struct FlangeFit {
   Vec3 measured_normal = Vec3::Zero();  ///< normal of the fitted plane in the CAD frame
   FlangeShape shape;                    ///< flatness, curl, twist (shape.measured: whether)
   bool has_bend_line = false;  ///< false: no bend orients it; curl and twist are not defined
+  EdgeDeviation edge;          ///< its free edge (end flanges: one bend) against the CAD's
 };
 
 /// The bend angle at one station along the bend line.

@@ -18,10 +18,15 @@ double value_or_zero(const std::vector<double>& v, std::size_t i) {
   return i < v.size() ? v[i] : 0.0;
 }
 
+// Flange i's length as produced.
+double flange_length(const ProfileSpec& nominal, const ProfileShape& shape, std::size_t i) {
+  return nominal.flange_lengths_mm[i] + value_or_zero(shape.length_change_mm, i);
+}
+
 // Signed sweep (radians, left positive) of flange i's curl: its length over its radius.
 double curl_sweep_rad(const ProfileSpec& nominal, const ProfileShape& shape, std::size_t i) {
   const double rho = value_or_zero(shape.curl_radius_mm, i);
-  return rho == 0.0 ? 0.0 : nominal.flange_lengths_mm[i] / rho;
+  return rho == 0.0 ? 0.0 : flange_length(nominal, shape, i) / rho;
 }
 
 // Signed turn of bend i at y (radians): the nominal turn less the springback there, less half
@@ -87,8 +92,13 @@ std::string check(const ProfileSpec& nominal, const ProfileShape& shape) {
     return v.empty() || v.size() == want;
   };
   if (!sized(shape.springback_deg, bends) ||
-      !sized(shape.springback_gradient_deg_per_100mm, bends) || !sized(shape.curl_radius_mm, n))
-    return "springback, gradient and curl need one value per bend, bend and flange";
+      !sized(shape.springback_gradient_deg_per_100mm, bends) || !sized(shape.curl_radius_mm, n) ||
+      !sized(shape.length_change_mm, n))
+    return "springback, gradient, curl and length change need one value per bend, bend, flange "
+           "and flange";
+  for (std::size_t i = 0; i < n; ++i)
+    if (!(flange_length(nominal, shape, i) > 0.0))
+      return "flange " + std::to_string(i) + ": length change leaves no flange";
   for (std::size_t i = 0; i < n; ++i)
     if (std::abs(curl_sweep_rad(nominal, shape, i)) >= std::numbers::pi)
       return "flange " + std::to_string(i) + ": curl sweeps half a turn or more";
@@ -117,7 +127,8 @@ void build_section(const ProfileSpec& nominal, const ProfileShape& shape, const 
   for (std::size_t i = 0; i < n; ++i) {
     const double sweep = curl_sweep_rad(nominal, shape, i);
     const double rho = std::abs(value_or_zero(shape.curl_radius_mm, i));
-    ProfileElement flange = advance(position, direction, nominal.flange_lengths_mm[i], rho, sweep);
+    ProfileElement flange =
+        advance(position, direction, flange_length(nominal, shape, i), rho, sweep);
     flange.flange_index = static_cast<int>(i);
     path.push_back(flange);
     if (i + 1 == n) break;

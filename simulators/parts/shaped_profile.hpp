@@ -7,7 +7,8 @@
 //     kept), the turns of the bends next to it reduced by half its sweep each (a first flange
 //     starts turned back by half its sweep), so every flange's chord keeps its nominal
 //     direction (a curled wall bows out between its nominal ends),
-//   - twist: the whole section turning linearly about the y axis along y.
+//   - twist: the whole section turning linearly about the y axis along y,
+//   - flange lengths changed (a free edge moved along the sheet).
 // The section at every y is built exactly (lines and arcs), so every figure below is known in
 // closed form: the angle each bend turns at any y, each flange's curl radius and twist rate.
 //
@@ -35,6 +36,9 @@ struct ProfileShape {
   /// The whole section turns about the y axis through the middle of the nominal path (by arc
   /// length), right-handed about +y, by this per 100 mm along +y; 0 at mid-width.
   double twist_deg_per_100mm = 0.0;
+  /// Per flange: its length as produced minus the nominal (a free edge moved along the sheet:
+  /// overhang > 0, draw-in < 0); empty: 0.
+  std::vector<double> length_change_mm;
 };
 
 /// The produced section at extrusion coordinate `y_mm`: elements in path order as

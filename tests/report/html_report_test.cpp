@@ -87,6 +87,8 @@ TEST_F(HtmlReport, ShowsTheAngleAlongTheBendAndTheFlangeShape) {
   EXPECT_NE(html_->find(">1.234 (rms 0.020)</td><td class='num'>-240</td><td class='num'>+0.125<"),
             std::string::npos);
   EXPECT_NE(html_->find(">0.081 (rms 0.020)</td><td class='num'>flat</td>"), std::string::npos);
+  EXPECT_NE(html_->find(">in-plane +0.31 (+0.29 to +0.33)<br>across -0.52 (-0.55 to -0.49)<"),
+            std::string::npos);
 }
 
 TEST_F(HtmlReport, EscapesEveryTextFromTheReport) {

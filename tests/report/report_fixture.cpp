@@ -111,6 +111,16 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
     seg->set_flatness_rms_mm(0.02);
     if (s == 3) seg->set_curl_radius_mm(-240.0);
     seg->set_twist_deg_per_100mm(0.125);
+    if (s == 0) {  // the first brim's free edge: 0.31 mm long, 0.52 mm low
+      auto* edge = seg->mutable_edge_deviation_mm();
+      edge->set_strips(3);
+      edge->set_in_plane_mean(0.31);
+      edge->set_in_plane_min(0.29);
+      edge->set_in_plane_max(0.33);
+      edge->set_across_mean(-0.52);
+      edge->set_across_min(-0.55);
+      edge->set_across_max(-0.49);
+    }
   }
   // Compensation: opposite of the deviation field at 60 control points along the profile.
   for (int k = 0; k < 60; ++k) {

@@ -79,6 +79,18 @@ TEST(SpringbackProto, ReportHoldsTheShapeFigures) {
   EXPECT_TRUE(report.segments(1).has_twist_deg_per_100mm());
   EXPECT_NEAR(report.segments(1).flatness_rms_mm(), 0.02, 0.005);
   EXPECT_GT(report.segments(0).flatness_mm(), 0.3);  // 30 mm curled to 200 mm bows 0.56 mm
+  // The end flanges' free edges (the exact profile distance gives the CAD edge); the web has none.
+  ASSERT_TRUE(report.segments(2).has_edge_deviation_mm());
+  EXPECT_EQ(report.segments(2).edge_deviation_mm().strips(), 3);
+  // The scan is in the part's frame: the edge moved as the sections say (the springback of
+  // both bends swings the last flange along itself).
+  const auto nominal_end = profile_path(spec).back();
+  const auto produced = shaped_section(spec, shape, 30.0);
+  ASSERT_TRUE(produced.ok());
+  const Eigen::Vector2d out = (nominal_end.end - nominal_end.start).normalized();
+  EXPECT_NEAR(report.segments(2).edge_deviation_mm().in_plane_mean(),
+              (produced->back().end - nominal_end.end).dot(out), 0.05);
+  EXPECT_FALSE(report.segments(1).has_edge_deviation_mm());
 }
 
 }  // namespace

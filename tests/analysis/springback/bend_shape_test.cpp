@@ -231,6 +231,69 @@ TEST(BendShape, FlatFlangeFlatnessIsTheNoise) {
   EXPECT_EQ(result->bends[0].measured_angle_deg, result->bends[0].plane_angle_deg);
 }
 
+// The free edges of a hat's brims against the CAD edges: the last brim 0.3 mm longer (or
+// shorter) and turned by its bend so that its edge sits 0.5 mm off; the global fit then places
+// the part as it can. Each strip's truth from the exact sections, the part placed where the
+// global fit put it; the edge's min, mean and max each within 0.05 mm.
+TEST(BendShape, FreeEdgeInPlaneAndAcrossWithin005mm) {
+  std::mt19937 rng(36);
+  double worst = 0.0;
+  for (int trial = 0; trial < (kUnderSanitizer ? 1 : 3); ++trial) {
+    ProfileSpec spec = hat_profile(30 + 5 * trial, 40, 50, 90, 4);
+    spec.width_mm = 120;
+    ProfileShape shape;
+    // Turning the brim about its bend by atan(0.5 / arm) moves its edge 0.5 mm across.
+    const double arm = spec.flange_lengths_mm.back() + spec.bend_radii_mm.back();
+    shape.springback_deg = {0, 0, 0, std::atan(0.5 / arm) / kDeg * (trial == 1 ? -1 : 1)};
+    shape.length_change_mm = {0, 0, 0, 0, trial == 2 ? -0.3 : 0.3};
+    Transform T_cad_part;
+    const auto result = measure(spec, shape, 100000, rng, &T_cad_part);
+    ASSERT_TRUE(result.ok()) << result.message();
+    const auto nominal = profile_path(spec);
+    // Each brim's free edge: the path's start (flange 0) and end (flange 4), 6 strips of 20 mm.
+    for (const bool last : {false, true}) {
+      const ProfileElement& n = last ? nominal.back() : nominal.front();
+      const Eigen::Vector2d dir2 = (n.end - n.start).normalized() * (last ? 1.0 : -1.0);
+      const Vec3 out = profile_to_3d(dir2, 0.0);
+      // The reference side's normal: left of the path.
+      const Vec3 normal =
+          profile_to_3d(Eigen::Vector2d(-dir2.y(), dir2.x()), 0.0) * (last ? 1.0 : -1.0);
+      Eigen::Vector2d in_truth(1e9, -1e9), across_truth(1e9, -1e9);
+      double in_mean = 0.0, across_mean = 0.0;
+      for (int k = 0; k < 6; ++k) {
+        const double y = 10.0 + 20.0 * k;
+        const auto produced = shaped_section(spec, shape, y);
+        ASSERT_TRUE(produced.ok());
+        const Vec3 cad = profile_to_3d(last ? n.end : n.start, y);
+        const Vec3 made =
+            T_cad_part * profile_to_3d(last ? produced->back().end : produced->front().start, y);
+        const double in = (made - cad).dot(out), across = (made - cad).dot(normal);
+        in_truth = {std::min(in_truth[0], in), std::max(in_truth[1], in)};
+        across_truth = {std::min(across_truth[0], across), std::max(across_truth[1], across)};
+        in_mean += in / 6;
+        across_mean += across / 6;
+      }
+      const EdgeDeviation& e = result->flanges[last ? 4 : 0].edge;
+      ASSERT_TRUE(e.measured) << "flange " << (last ? 4 : 0);
+      EXPECT_EQ(e.strips, 6);
+      const double errors[] = {e.in_plane_min_mm - in_truth[0], e.in_plane_mean_mm - in_mean,
+                               e.in_plane_max_mm - in_truth[1], e.across_min_mm - across_truth[0],
+                               e.across_mean_mm - across_mean,  e.across_max_mm - across_truth[1]};
+      for (double error : errors) {
+        EXPECT_NEAR(error, 0.0, 0.05) << "flange " << (last ? 4 : 0) << " trial " << trial;
+        worst = std::max(worst, std::abs(error));
+      }
+      if (last) {  // what the part was made with, as far as the global fit leaves it
+        EXPECT_NEAR(std::abs(in_mean), 0.3, 0.1);
+        EXPECT_GT(std::abs(across_mean), 0.2);
+      }
+    }
+    for (int f = 1; f <= 3; ++f)
+      EXPECT_FALSE(result->flanges[static_cast<std::size_t>(f)].edge.measured);
+  }
+  std::printf("free edge: worst error %.4f mm\n", worst);
+}
+
 TEST(BendShape, ResultDoesNotDependOnTheThreadCount) {
   const ProfileSpec spec = hat_profile(25, 40, 45, 90, 4);
   ProfileShape shape;

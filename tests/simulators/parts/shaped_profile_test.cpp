@@ -115,26 +115,25 @@ TEST(ShapedProfile, WithoutShapeItIsTheProducedProfile) {
 
 TEST(ShapedProfile, RejectsShapesItCannotBuild) {
   const ProfileSpec l = l_profile(40, 30, 90, 3);
-  EXPECT_FALSE(shaped_section(l,
-                              ProfileShape{.springback_deg = {1, 2},
-                                           .springback_gradient_deg_per_100mm = {},
-                                           .curl_radius_mm = {}},
-                              0)
-                   .ok());
-  EXPECT_FALSE(shaped_section(l,
-                              ProfileShape{.springback_deg = {95},
-                                           .springback_gradient_deg_per_100mm = {},
-                                           .curl_radius_mm = {}},
-                              0)
-                   .ok());
-  EXPECT_FALSE(shaped_section(l,
-                              ProfileShape{.springback_deg = {},
-                                           .springback_gradient_deg_per_100mm = {},
-                                           .curl_radius_mm = {10, 0}},
-                              0)
-                   .ok());  // 40 mm on r 10
+  ProfileShape sizes, closed, tight, gone;
+  sizes.springback_deg = {1, 2};   // one bend
+  closed.springback_deg = {95};    // turns the other way
+  tight.curl_radius_mm = {10, 0};  // 40 mm on r 10
+  gone.length_change_mm = {0, -30};
+  for (const ProfileShape& bad : {sizes, closed, tight, gone})
+    EXPECT_FALSE(shaped_section(l, bad, 0).ok());
   EXPECT_FALSE(simulate_shaped_scan(l, {}, {.point_count = 0}).ok());
   EXPECT_TRUE(simulate_shaped_scan(l, {}, {.point_count = 10}).ok());
+}
+
+// A length change moves the free edge along the flange by that much.
+TEST(ShapedProfile, LengthChangeMovesTheFreeEdge) {
+  const ProfileSpec l = l_profile(40, 30, 90, 3);
+  ProfileShape longer;
+  longer.length_change_mm = {0, 0.3};
+  const auto path = shaped_section(l, longer, 10);
+  ASSERT_TRUE(path.ok());
+  EXPECT_NEAR((path->back().end - profile_path(l).back().end - Vec2(0, 0.3)).norm(), 0.0, 1e-12);
 }
 
 }  // namespace

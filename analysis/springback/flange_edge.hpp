@@ -1,0 +1,43 @@
+#pragma once
+// The free edge of an end flange against the CAD edge (docs/springback.md "Flange end
+// position"): where the sheet ends, along the sheet (in-plane: overhang > 0, draw-in < 0) and
+// across it (height along the flange's CAD normal), in strips along the edge.
+//
+// CAD edge: the exact closest point of the model surface (PartModel::distance) to a point a
+// little beyond the flange's outermost sample, in its plane, at each strip's centre: the foot
+// lies on the edge. Scan edge: a straight line along the edge (a straight CAD edge stays
+// straight under the motions of a flange), the lowest line above all the flange's points within
+// `band_mm` inside the CAD edge (their upper convex hull), moved out by band_mm / n for the n
+// points; evaluated at each strip's centre; its height is the flange's fitted surface there
+// (FlangeShape), so noise along the normal does not enter.
+//
+// Thread safety: pure function (SurfaceDistance::closest is thread-safe).
+
+#include "analysis/core/part_model.hpp"
+#include "analysis/springback/flange_shape.hpp"
+
+namespace springscan::analysis {
+
+struct FlangeEdgeSettings {
+  double strip_length_mm = 20.0;  ///< one strip along the edge per this length
+  int min_strips = 3;             ///< and at least this many
+  double band_mm = 5.0;           ///< the scan points this far inside the CAD edge estimate it
+  int min_points_per_strip = 20;  ///< a strip with fewer is left out
+};
+
+/// Deviation of the free edge from the CAD edge, over the strips along it (mm).
+struct EdgeDeviation {
+  bool measured = false;  ///< false: not an end flange, no exact CAD surface, or too few points
+  int strips = 0;
+  double in_plane_mean_mm = 0.0, in_plane_min_mm = 0.0, in_plane_max_mm = 0.0;
+  double across_mean_mm = 0.0, across_min_mm = 0.0, across_max_mm = 0.0;
+};
+
+/// The free edge of `flange` (the side away from `bend_axis_point`, its only bend's axis), from
+/// its fitted `shape` (frame coordinates of its scan points and inliers). Unmeasured when the
+/// model has no exact distance or the shape was not measured.
+EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
+                                const FlangeShape& shape, const Vec3& bend_axis_point,
+                                const FlangeEdgeSettings& settings = {});
+
+}  // namespace springscan::analysis
