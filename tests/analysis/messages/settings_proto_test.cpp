@@ -125,7 +125,8 @@ TEST(SettingsProto, RoundTripOfTheSettingsInForce) {
 TEST(SettingsProto, ShapeSettingsOverrideAndAreChecked) {
   const auto m = parse(R"(
     springback { station_spacing_mm: 25 min_stations: 5 min_curl_sagitta_mm: 0.05 }
-    verdict { max_angle_spread_deg: 0.4 min_curl_radius_mm: 300 max_flatness_mm: 0.8 })");
+    verdict { max_angle_spread_deg: 0.4 min_curl_radius_mm: 300 max_flatness_mm: 0.8
+              max_edge_deviation_mm: 0.25 })");
   const auto springback = from_proto(m.springback());
   const auto verdict = verdict_settings_from_proto(m);
   ASSERT_TRUE(springback && verdict);
@@ -135,10 +136,12 @@ TEST(SettingsProto, ShapeSettingsOverrideAndAreChecked) {
   EXPECT_EQ(verdict->max_angle_spread_deg, 0.4);
   EXPECT_EQ(verdict->min_curl_radius_mm, 300.0);
   EXPECT_EQ(verdict->max_flatness_mm, 0.8);
+  EXPECT_EQ(verdict->max_edge_deviation_mm, 0.25);
   const auto defaults = verdict_settings_from_proto(parse(""));
   EXPECT_EQ(defaults->max_angle_spread_deg, 0.0);
   EXPECT_EQ(defaults->min_curl_radius_mm, 0.0);
   EXPECT_EQ(defaults->max_flatness_mm, 0.0);
+  EXPECT_EQ(defaults->max_edge_deviation_mm, 0.0);
   EXPECT_TRUE(verdict_settings_from_proto(parse("verdict { max_flatness_mm: 0 }")));
   EXPECT_NE(verdict_settings_from_proto(parse("verdict { min_curl_radius_mm: -1 }"))
                 .message()
