@@ -20,7 +20,8 @@ void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
   s.set_flatness_rms_mm(shape.flatness_rms_mm);
   if (shape.curled && std::isfinite(shape.curl_radius_mm))
     s.set_curl_radius_mm(shape.curl_radius_mm);
-  if (flange.has_bend_line) s.set_twist_deg_per_100mm(shape.twist_deg_per_100mm);
+  if (flange.has_bend_line && shape.twist_measured)
+    s.set_twist_deg_per_100mm(shape.twist_deg_per_100mm);
   if (!flange.edge.measured) return;
   const EdgeDeviation& e = flange.edge;
   v1::EdgeDeviation& out = *s.mutable_edge_deviation_mm();

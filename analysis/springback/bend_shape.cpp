@@ -44,6 +44,7 @@ void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
     fit.shape.surface.A = 0.0;
     fit.shape.curl_radius_mm = std::numeric_limits<double>::infinity();
     fit.shape.twist_deg_per_100mm = 0.0;
+    fit.shape.twist_measured = false;
   }
   if (bend && bends_of(seg, flange.id) == 1)
     fit.edge = measure_free_edge(model, flange, fit.shape, bend->axis_point, st.edge);

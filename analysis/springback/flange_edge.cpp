@@ -17,26 +17,36 @@ double surface_h(const FlangeSurface& f, double s, double t) {
   return h;
 }
 
-// The flange's model samples in its frame: the outermost s towards the edge (times `out`)
-// and the extent along the edge.
-struct SampleExtent {
-  double edge = -std::numeric_limits<double>::infinity();
+// The flange's model samples in its frame, as (t, s towards the edge), and their extent along
+// the edge.
+struct Samples {
+  std::vector<Eigen::Vector2d> ts;
   double t_min = std::numeric_limits<double>::infinity();
   double t_max = -std::numeric_limits<double>::infinity();
 };
 
-SampleExtent sample_extent(const PartModel& model, const Flange& flange, const FlangeFrame& frame,
-                           double out) {
-  SampleExtent e;
+Samples flange_samples(const PartModel& model, const Flange& flange, const FlangeFrame& frame,
+                       double out) {
+  Samples e;
   const PointCloud& s = model.samples;
-  for (std::size_t i = 0; i < s.size(); ++i) {
-    if (std::find(flange.face_ids.begin(), flange.face_ids.end(), s.face_ids[i]) ==
+  std::vector<Vec3> q;
+  for (std::size_t i = 0; i < s.size(); ++i)
+    if (std::find(flange.face_ids.begin(), flange.face_ids.end(), s.face_ids[i]) !=
         flange.face_ids.end())
-      continue;
-    const Vec3 q = frame.local(s.points[i]);
-    e.edge = std::max(e.edge, out * q.x());
-    e.t_min = std::min(e.t_min, q.y());
-    e.t_max = std::max(e.t_max, q.y());
+      q.push_back(frame.local(s.points[i]));
+  // A solid's flange has both sides of the sheet; the scanned side is the one nearer the scan's
+  // points (h = 0 at their centroid). Its outline is the edge: the other side's may differ (a
+  // chamfer, a draft).
+  double h_lo = std::numeric_limits<double>::infinity(), h_hi = -h_lo;
+  for (const Vec3& p : q) h_lo = std::min(h_lo, p.z()), h_hi = std::max(h_hi, p.z());
+  const double mid = 0.5 * (h_lo + h_hi);
+  const bool two_sides = h_hi - h_lo > 0.5 * flange.thickness_mm && flange.thickness_mm > 0.0;
+  const bool upper = std::abs(h_hi) < std::abs(h_lo);
+  for (const Vec3& p : q) {
+    if (two_sides && (p.z() > mid) != upper) continue;
+    e.ts.emplace_back(p.y(), out * p.x());
+    e.t_min = std::min(e.t_min, p.y());
+    e.t_max = std::max(e.t_max, p.y());
   }
   return e;
 }
@@ -88,30 +98,48 @@ EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
   const FlangeFrame& frame = shape.frame;
   // The free edge lies on the side of the centroid away from the bend.
   const double out = frame.local(bend_axis_point).x() < 0.0 ? 1.0 : -1.0;
-  const SampleExtent extent = sample_extent(model, flange, frame, out);
-  const double length = extent.t_max - extent.t_min;
+  const Samples samples = flange_samples(model, flange, frame, out);
+  const double length = samples.t_max - samples.t_min;
   if (!(length > 0.0) || !(st.strip_length_mm > 0.0)) return result;
   const auto n = static_cast<std::size_t>(
       std::max<long>(st.min_strips, std::lround(length / st.strip_length_mm)));
   const double window = length / static_cast<double>(n);
+  const auto strip_of = [&](double t) { return std::floor((t - samples.t_min) / window); };
   std::vector<Strip> strips(n);
+  std::vector<double> outermost(n, -std::numeric_limits<double>::infinity());
+  for (const Eigen::Vector2d& p : samples.ts) {
+    const double k = std::min(strip_of(p.x()), static_cast<double>(n - 1));
+    outermost[static_cast<std::size_t>(k)] =
+        std::max(outermost[static_cast<std::size_t>(k)], p.y());
+  }
+  // The CAD edge at each strip's centre: the closest surface point to a point in the plane 1 mm
+  // beyond the strip's outermost sample lies on the edge there.
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
   for (std::size_t k = 0; k < n; ++k) {
     Strip& strip = strips[k];
-    strip.centre = extent.t_min + (static_cast<double>(k) + 0.5) * window;
-    // A point in the plane a little beyond the outermost sample: its closest surface point is
-    // on the edge.
-    const double beyond = out * (extent.edge + 3.0);
+    strip.centre = samples.t_min + (static_cast<double>(k) + 0.5) * window;
+    const double beyond = out * (outermost[k] + 1.0);
     const Vec3 query = frame.origin + beyond * frame.u + strip.centre * frame.d;
     const Vec3 foot = frame.local(model.distance->closest(query).foot);
     strip.cad_s = out * foot.x();
     strip.cad_h = foot.z();
+    const Eigen::Vector2d x(1.0, strip.centre);
+    normal += x * x.transpose();
+    rhs += x * strip.cad_s;
   }
+  // Only a straight CAD edge is measured: the scan's edge is taken as a straight line. A tab,
+  // a notch or a curved outline is left out rather than reported against the wrong line.
+  const Eigen::Vector2d cad_line = normal.ldlt().solve(rhs);
+  for (const Strip& strip : strips)
+    if (!(std::abs(strip.cad_s - cad_line[0] - cad_line[1] * strip.centre) <= st.max_edge_bend_mm))
+      return result;
   // The scan points within the band inside the CAD edge, as (t, s towards the edge).
   std::vector<Eigen::Vector2d> band;
   for (std::size_t j = 0; j < shape.local.size(); ++j) {
     if (!shape.inlier[j]) continue;
     const Vec3& q = shape.local[j];
-    const double k = std::floor((q.y() - extent.t_min) / window);
+    const double k = strip_of(q.y());
     if (!(k >= 0.0 && k < static_cast<double>(n))) continue;
     Strip& strip = strips[static_cast<std::size_t>(k)];
     if (out * q.x() < strip.cad_s - st.band_mm) continue;
@@ -139,7 +167,9 @@ EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
     result.across_max_mm = std::max(result.across_max_mm, across);
     ++result.strips;
   }
-  if (result.strips == 0) return EdgeDeviation{};
+  // Every strip must see the edge: a strip the scan does not reach (occlusion, a missing area)
+  // would leave the straight line to the others' points and report an edge nobody saw.
+  if (result.strips < static_cast<int>(n)) return EdgeDeviation{};
   result.in_plane_mean_mm = in_sum / result.strips;
   result.across_mean_mm = across_sum / result.strips;
   result.measured = true;

@@ -4,8 +4,9 @@
 // across it (height along the flange's CAD normal), in strips along the edge.
 //
 // CAD edge: the exact closest point of the model surface (PartModel::distance) to a point a
-// little beyond the flange's outermost sample, in its plane, at each strip's centre: the foot
-// lies on the edge. Scan edge: a straight line along the edge (a straight CAD edge stays
+// little beyond the strip's outermost sample, in the flange's plane, at each strip's centre:
+// the foot lies on the edge. Only a straight CAD edge is measured (the feet on one line within
+// max_edge_bend_mm). Scan edge: a straight line along the edge (a straight CAD edge stays
 // straight under the motions of a flange), the lowest line above all the flange's points within
 // `band_mm` inside the CAD edge (their upper convex hull), moved out by band_mm / n for the n
 // points; evaluated at each strip's centre; its height is the flange's fitted surface there
@@ -22,12 +23,16 @@ struct FlangeEdgeSettings {
   double strip_length_mm = 20.0;  ///< one strip along the edge per this length
   int min_strips = 3;             ///< and at least this many
   double band_mm = 5.0;           ///< the scan points this far inside the CAD edge estimate it
-  int min_points_per_strip = 20;  ///< a strip with fewer is left out
+  int min_points_per_strip = 20;  ///< a strip with fewer: the edge is not measured
+  /// A CAD edge whose strips' edge points leave a straight line by more than this is not
+  /// measured (tabs, notches, curved outlines).
+  double max_edge_bend_mm = 0.05;
 };
 
 /// Deviation of the free edge from the CAD edge, over the strips along it (mm).
 struct EdgeDeviation {
-  bool measured = false;  ///< false: not an end flange, no exact CAD surface, or too few points
+  bool measured = false;  ///< false: not an end flange, no exact CAD surface, a CAD edge that
+                          ///< is not straight, or a strip with too few points near the edge
   int strips = 0;
   double in_plane_mean_mm = 0.0, in_plane_min_mm = 0.0, in_plane_max_mm = 0.0;
   double across_mean_mm = 0.0, across_min_mm = 0.0, across_max_mm = 0.0;

@@ -154,10 +154,13 @@ FlangeShape fit_flange_shape(const PointCloud& cloud, std::span<const std::uint3
   std::vector<Vec3> q;
   q.reserve(points.size());
   double s_min = std::numeric_limits<double>::infinity(), s_max = -s_min;
+  double t_min = s_min, t_max = s_max;
   for (std::uint32_t i : points) {
     q.push_back(frame.local(cloud.points[i]));
     s_min = std::min(s_min, q.back().x());
     s_max = std::max(s_max, q.back().x());
+    t_min = std::min(t_min, q.back().y());
+    t_max = std::max(t_max, q.back().y());
   }
   double sigma_A = 0.0;
   if (!robust_fit(q, st, shape, sigma_A)) return shape;
@@ -178,6 +181,7 @@ FlangeShape fit_flange_shape(const PointCloud& cloud, std::span<const std::uint3
   // tilts towards +h as the normal turns about d the other way).
   const double B = shape.surface.B;
   shape.twist_deg_per_100mm = -shape.surface.G / (1.0 + B * B) * kRadToDeg * 100.0;
+  shape.twist_measured = t_max - t_min >= st.min_twist_length_mm;
   shape.inlier = inlier_flags(q, shape);
   flatness(q, shape, shape);
   shape.local = std::move(q);

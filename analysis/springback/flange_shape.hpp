@@ -30,6 +30,9 @@ struct FlangeShapeSettings {
   double min_curl_sagitta_mm = 0.03;
   double outlier_sigmas = 3.0;  ///< points farther from the model than this are left out
   int min_points = 50;          ///< fewer: the shape is not measured
+  /// A flange whose points span less than this along the bend line has no twist (a short tab's
+  /// twist is its noise).
+  double min_twist_length_mm = 30.0;
 };
 
 /// A flange's frame: unit u (across, perpendicular to the bend line), d (along the bend line),
@@ -67,6 +70,7 @@ struct FlangeShape {
   /// Turn of the flange's normal, right-handed about the bend line, per 100 mm along it (a
   /// chirality: independent of the line's orientation).
   double twist_deg_per_100mm = 0.0;
+  bool twist_measured = false;  ///< its points span min_twist_length_mm along the bend line
 };
 
 /// The frame of a flange with CAD normal `normal` and bend line direction `along` (projected

@@ -225,6 +225,16 @@ TEST(BendShape, FlatFlangeFlatnessIsTheNoise) {
     EXPECT_LT(f.shape.flatness_max_mm, 0.12);
     EXPECT_FALSE(f.shape.curled);
     EXPECT_TRUE(std::isinf(f.shape.curl_radius_mm));
+    EXPECT_TRUE(f.shape.twist_measured);
+  }
+  // A 20 mm wide L: too short along its bend line for a twist.
+  ProfileSpec narrow = spec;
+  narrow.width_mm = 20;
+  const auto short_result = measure(narrow, shape, 20000, rng);
+  ASSERT_TRUE(short_result.ok());
+  for (const FlangeFit& f : short_result->flanges) {
+    EXPECT_TRUE(f.shape.measured);
+    EXPECT_FALSE(f.shape.twist_measured);
   }
   EXPECT_EQ(result->bends[0].stations.size(), 3u) << "60 mm at 20 mm";
   EXPECT_FALSE(result->bends[0].end_tangents);
