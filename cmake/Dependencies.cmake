@@ -6,6 +6,9 @@ find_package(Threads REQUIRED)
 find_package(Protobuf REQUIRED)
 find_package(ZLIB REQUIRED)
 find_package(OpenCASCADE REQUIRED)
+# Mesh decimation (analysis/preprocess/decimation.cpp): vtkDecimatePro and the data types it
+# needs, nothing more (docs/decimation.md: why VTK, what it costs to install).
+find_package(VTK REQUIRED COMPONENTS CommonCore CommonDataModel FiltersCore)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
 pkg_check_modules(LIBMODBUS REQUIRED IMPORTED_TARGET libmodbus)

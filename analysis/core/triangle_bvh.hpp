@@ -87,7 +87,9 @@ double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_tri
         TriangleFoot foot = closest_on_triangle(query, t[0], t[1], t[2]);
         const double d = std::sqrt(foot.squared_distance);
         if (d < best) best = d;
-        if (foot.squared_distance <= bound2()) {
+        // Compared as distances, not squared: sqrt(x)^2 can round below x, and with no slack
+        // the nearest triangle itself then failed its own bound and was never reported.
+        if (d <= best + slack_mm) {
           foot.triangle = original_[i];
           on_triangle(foot);
         }

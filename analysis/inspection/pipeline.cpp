@@ -331,4 +331,41 @@ Expected<bool> check_analysis_settings(const v1::AnalysisSettings& settings) {
   return true;
 }
 
+Expected<InspectionOutcome> run_mesh_inspection(
+    const PartModel& model, const PointCloud& scan,
+    const std::vector<std::array<std::uint32_t, 3>>& triangles,
+    const v1::AnalysisSettings& settings) {
+  auto reduction = from_proto(settings.reduction());
+  if (!reduction) return reduction.error();
+  auto threads = threads_from_proto(settings);
+  if (!threads) return threads.error();
+  DecimationSettings decimation = reduction->mesh_decimation;
+  MeshScanReduction summary{.decimated = decimation.enabled,
+                            .vertices_in = scan.size(),
+                            .triangles_in = triangles.size(),
+                            .vertices_out = scan.size(),
+                            .triangles_out = triangles.size()};
+  if (!decimation.enabled) {
+    auto out = run_inspection(model, scan, settings);
+    if (out) out->mesh_reduction = summary;
+    return out;
+  }
+  // 2b. Mesh decimation of the scanner triangulation (paper §2), before every other stage.
+  const auto start = Clock::now();
+  decimation.threads = *threads;
+  auto decimated = decimate_scan(scan, triangles, decimation);
+  if (!decimated) return decimated.error().prepend("scan: ");
+  summary.time_ms = ms_since(start);
+  summary.vertices_out = decimated->cloud.size();
+  summary.triangles_out = decimated->result.mesh.triangles.size();
+  summary.max_deviation_mm = decimated->result.max_deviation_mm;
+  auto out = run_inspection(model, decimated->cloud, settings);
+  if (!out) return out;
+  out->mesh_reduction = summary;
+  auto& timings = *out->report.mutable_timings_ms();
+  timings.set_reduce(timings.reduce() + summary.time_ms);
+  timings.set_total(timings.total() + summary.time_ms);
+  return out;
+}
+
 }  // namespace springscan::analysis

@@ -2,6 +2,7 @@
 #include "analysis/messages/settings_proto.hpp"
 
 #include <cmath>
+#include <optional>
 #include <string>
 
 namespace springscan::analysis {
@@ -13,6 +14,18 @@ Error bad(const std::string& field, double value, const std::string& rule) {
 }
 
 bool in_range(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+// reduction.mesh_decimation: the fields given, then the stage's own range check (one place).
+std::optional<Error> decimation_from_proto(const v1::MeshDecimationSettings& m,
+                                           DecimationSettings& s) {
+  if (m.has_enabled()) s.enabled = m.enabled();
+  if (m.has_target_reduction()) s.target_reduction = m.target_reduction();
+  if (m.has_feature_angle_deg()) s.feature_angle_deg = m.feature_angle_deg();
+  if (m.has_boundary_vertex_deletion()) s.boundary_vertex_deletion = m.boundary_vertex_deletion();
+  if (m.has_max_error_mm()) s.max_error_mm = m.max_error_mm();
+  if (auto valid = validate(s); !valid) return valid.error();
+  return std::nullopt;
+}
 
 }  // namespace
 
@@ -52,6 +65,7 @@ Expected<ReductionSettings> from_proto(const v1::ReductionSettings& m) {
       return bad("reduction.min_curvature", m.min_curvature(), "0 to 1");
     s.curvature.min_curvature = m.min_curvature();
   }
+  if (auto error = decimation_from_proto(m.mesh_decimation(), s.mesh_decimation)) return *error;
   return s;
 }
 
@@ -144,6 +158,12 @@ void to_proto(const ReductionSettings& s, v1::ReductionSettings* m) {
   m->set_kcenter_count(static_cast<std::int32_t>(s.kcenter.center_count));
   m->set_voxel_size_mm(s.voxel_size_mm);
   m->set_min_curvature(s.curvature.min_curvature);
+  v1::MeshDecimationSettings& d = *m->mutable_mesh_decimation();
+  d.set_enabled(s.mesh_decimation.enabled);
+  d.set_target_reduction(s.mesh_decimation.target_reduction);
+  d.set_feature_angle_deg(s.mesh_decimation.feature_angle_deg);
+  d.set_boundary_vertex_deletion(s.mesh_decimation.boundary_vertex_deletion);
+  d.set_max_error_mm(s.mesh_decimation.max_error_mm);
 }
 
 void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {

@@ -17,7 +17,7 @@ namespace springscan::analysis {
 /// normals.k_neighbors (3..1000), normals.radius_mm (>= 0).
 Expected<NormalSettings> from_proto(const v1::NormalSettings& message);
 /// reduction.kcenter_radius_mm (> 0), kcenter_count (0..10^7), voxel_size_mm (>= 0, 0 = auto),
-/// min_curvature (>= 0).
+/// min_curvature (>= 0), mesh_decimation.* (validate(DecimationSettings)'s ranges).
 Expected<ReductionSettings> from_proto(const v1::ReductionSettings& message);
 /// registration.*: method, max_iterations, max_correspondence_distance_mm, trimmed_fraction,
 /// robust_kernel, kernel_scale_mm, min_error_mm, error_ratio_stop (0 = off),

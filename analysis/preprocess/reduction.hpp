@@ -8,6 +8,7 @@
 #include "analysis/core/expected.hpp"
 #include "analysis/core/point_cloud.hpp"
 #include "analysis/preprocess/curvature.hpp"
+#include "analysis/preprocess/decimation.hpp"
 #include "analysis/preprocess/kcenter.hpp"
 #include "analysis/preprocess/voxel.hpp"
 
@@ -20,8 +21,9 @@ struct ReductionSettings {
   double min_voxel_fill = 0.1;          ///< voxels with fewer points than this share of the median
                                 ///< voxel's count are left out of the fit: isolated outliers
                                 ///< would otherwise weigh as much as a full voxel of surface
-  KCenterSettings kcenter;      ///< w = 10 mm by default (paper Figure 3)
-  CurvatureSettings curvature;  ///< minC; a library stage, not run by the pipeline
+  KCenterSettings kcenter;             ///< w = 10 mm by default (paper Figure 3)
+  CurvatureSettings curvature;         ///< minC; a library stage, not run by the pipeline
+  DecimationSettings mesh_decimation;  ///< a scan given as a mesh, before everything else
 };
 
 struct ReductionOutcome {

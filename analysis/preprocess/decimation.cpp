@@ -1,0 +1,280 @@
+// Mesh decimation through VTK's vtkDecimatePro (decimation.hpp). The only file that includes
+// VTK: the mesh goes in as vtkPolyData with each vertex's input index as point data, and comes
+// out as our TriangleMesh plus the surviving indices.
+#include "analysis/preprocess/decimation.hpp"
+
+#include <vtkCallbackCommand.h>
+#include <vtkCellArray.h>
+#include <vtkCellArrayIterator.h>
+#include <vtkCommand.h>
+#include <vtkDecimatePro.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "analysis/core/parallel.hpp"
+#include "analysis/core/triangle_bvh.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+using Triangles = std::vector<std::array<std::uint32_t, 3>>;
+
+constexpr const char* kInputIdName = "springscan_input_id";
+// vtkIdType is 64-bit in Debian's VTK, but our indices are 32-bit; 2^31 leaves room for both.
+constexpr std::size_t kMaxElements = std::size_t{1} << 31;
+// Runs with a tightened threshold before giving the mesh back unreduced (each run shrinks the
+// threshold by at least the measured excess; two are usually enough).
+constexpr int kMaxAttempts = 6;
+
+Error bad_setting(const std::string& field, double value, const std::string& rule) {
+  return fail(ErrorCode::kInvalidSettings, "settings: reduction.mesh_decimation." + field + " = " +
+                                               std::to_string(value) + " (" + rule + ")");
+}
+
+bool in_range(double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; }
+
+// VTK reports filter errors and warnings through vtkOutputWindow (stderr) unless an observer
+// takes them; library code does not print (STYLE.md §5), so they are collected here instead.
+struct VtkMessages {
+  std::string errors;
+  static void on_event(vtkObject*, unsigned long event, void* client, void* call_data) {
+    auto* self = static_cast<VtkMessages*>(client);
+    const char* text = static_cast<const char*>(call_data);
+    if (event == vtkCommand::ErrorEvent && text) self->errors += text;
+  }
+};
+
+vtkSmartPointer<vtkPolyData> to_vtk(const TriangleMesh& mesh) {
+  vtkNew<vtkDoubleArray> coords;
+  coords->SetNumberOfComponents(3);
+  coords->SetNumberOfTuples(static_cast<vtkIdType>(mesh.vertices.size()));
+  vtkNew<vtkIdTypeArray> input_id;
+  input_id->SetName(kInputIdName);
+  input_id->SetNumberOfValues(static_cast<vtkIdType>(mesh.vertices.size()));
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+    const auto id = static_cast<vtkIdType>(i);
+    coords->SetTypedTuple(id, mesh.vertices[i].data());
+    input_id->SetValue(id, id);
+  }
+  vtkNew<vtkIdTypeArray> offsets, connectivity;
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(mesh.triangles.size() + 1));
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(3 * mesh.triangles.size()));
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    offsets->SetValue(static_cast<vtkIdType>(t), static_cast<vtkIdType>(3 * t));
+    for (std::size_t c = 0; c < 3; ++c)
+      connectivity->SetValue(static_cast<vtkIdType>(3 * t + c), mesh.triangles[t][c]);
+  }
+  offsets->SetValue(static_cast<vtkIdType>(mesh.triangles.size()),
+                    static_cast<vtkIdType>(3 * mesh.triangles.size()));
+  vtkNew<vtkPoints> points;
+  points->SetData(coords);
+  vtkNew<vtkCellArray> polys;
+  polys->SetData(offsets, connectivity);
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
+  poly->SetPoints(points);
+  poly->SetPolys(polys);
+  poly->GetPointData()->AddArray(input_id);
+  return poly;
+}
+
+// The paper's criterion (§2): distance to the average plane, absolute, accumulated over the
+// deletions so that it bounds the distance to the original surface; no splitting, so the
+// topology (holes, the contour) stays and no vertex is duplicated.
+void configure(vtkDecimatePro& filter, const DecimationSettings& s, double threshold_mm) {
+  filter.SetTargetReduction(s.target_reduction);
+  filter.SetFeatureAngle(s.feature_angle_deg);
+  filter.SetBoundaryVertexDeletion(s.boundary_vertex_deletion ? 1 : 0);
+  filter.SetErrorIsAbsolute(1);
+  // vtkDecimatePro queues squared distances (to the average plane, or to the line of a contour
+  // or crease) and compares them with AbsoluteError as given: so the bound goes in squared.
+  filter.SetAbsoluteError(threshold_mm * threshold_mm);
+  filter.AccumulateErrorOn();
+  filter.PreserveTopologyOn();
+  filter.SplittingOff();
+  filter.PreSplitMeshOff();
+  filter.SetOutputPointsPrecision(vtkAlgorithm::DOUBLE_PRECISION);
+}
+
+// The output mesh in our types; `kept` maps the output's points back to the input. Points the
+// filter left without a triangle are dropped (they were deleted; VTK may keep their slots).
+Expected<DecimationResult> from_vtk(vtkPolyData& out, const TriangleMesh& in) {
+  auto* ids = vtkIdTypeArray::SafeDownCast(out.GetPointData()->GetArray(kInputIdName));
+  if (!ids || ids->GetNumberOfValues() != out.GetNumberOfPoints())
+    return fail(ErrorCode::kInternal, "mesh decimation: VTK dropped the input vertex ids");
+  DecimationResult result;
+  std::vector<std::uint32_t> output_index(static_cast<std::size_t>(out.GetNumberOfPoints()),
+                                          std::numeric_limits<std::uint32_t>::max());
+  auto cells = vtk::TakeSmartPointer(out.GetPolys()->NewIterator());
+  for (cells->GoToFirstCell(); !cells->IsDoneWithTraversal(); cells->GoToNextCell()) {
+    vtkIdType count = 0;
+    const vtkIdType* corners = nullptr;
+    cells->GetCurrentCell(count, corners);
+    if (count != 3) return fail(ErrorCode::kInternal, "mesh decimation: VTK returned a polygon");
+    std::array<std::uint32_t, 3> triangle{};
+    for (int c = 0; c < 3; ++c) {
+      std::uint32_t& slot = output_index[static_cast<std::size_t>(corners[c])];
+      if (slot == std::numeric_limits<std::uint32_t>::max()) {
+        slot = static_cast<std::uint32_t>(result.kept.size());
+        result.kept.push_back(static_cast<std::uint32_t>(ids->GetValue(corners[c])));
+      }
+      triangle[static_cast<std::size_t>(c)] = slot;
+    }
+    result.mesh.triangles.push_back(triangle);
+  }
+  result.mesh.vertices.reserve(result.kept.size());
+  for (std::uint32_t k : result.kept) result.mesh.vertices.push_back(in.vertices[k]);
+  return result;
+}
+
+// Vertices no triangle uses pass through: they are scan points the decimation has no
+// neighbourhood for, not surface it may simplify.
+void keep_isolated(const TriangleMesh& in, DecimationResult& result) {
+  std::vector<std::uint8_t> used(in.vertices.size(), 0);
+  for (const auto& t : in.triangles)
+    for (std::uint32_t v : t) used[v] = 1;
+  for (std::uint32_t i = 0; i < in.vertices.size(); ++i) {
+    if (used[i]) continue;
+    ++result.isolated_vertices;
+    result.kept.push_back(i);
+    result.mesh.vertices.push_back(in.vertices[i]);
+  }
+}
+
+// The largest distance of a deleted vertex to the reduced mesh (per block, then the maximum:
+// the same figure whatever the thread count).
+double max_deviation(const TriangleMesh& in, const DecimationResult& result, int threads) {
+  std::vector<std::uint8_t> kept(in.vertices.size(), 0);
+  for (std::uint32_t k : result.kept) kept[k] = 1;
+  const TriangleBvh bvh(result.mesh.vertices, result.mesh.triangles);
+  std::vector<double> block_max(block_count(in.vertices.size()), 0.0);
+  parallel_blocks(in.vertices.size(), threads, [&](std::size_t b, std::size_t lo, std::size_t hi) {
+    double worst = 0.0;
+    for (std::size_t i = lo; i < hi; ++i) {
+      if (kept[i]) continue;
+      const auto foot = bvh.nearest(in.vertices[i]);
+      if (foot) worst = std::max(worst, foot->squared_distance);
+    }
+    block_max[b] = worst;
+  });
+  const double worst = block_max.empty() ? 0.0 : *std::max_element(block_max.begin(), block_max.end());
+  return std::sqrt(worst);
+}
+
+// One vtkDecimatePro run with VTK's own error threshold `threshold_mm`, and the distance of the
+// deleted vertices to its result.
+Expected<DecimationResult> run_decimate_pro(vtkPolyData& input, const TriangleMesh& mesh,
+                                            const DecimationSettings& settings,
+                                            double threshold_mm) {
+  vtkNew<vtkDecimatePro> filter;
+  configure(*filter, settings, threshold_mm);
+  VtkMessages messages;
+  vtkNew<vtkCallbackCommand> observer;
+  observer->SetClientData(&messages);
+  observer->SetCallback(&VtkMessages::on_event);
+  filter->AddObserver(vtkCommand::ErrorEvent, observer);
+  filter->AddObserver(vtkCommand::WarningEvent, observer);
+  filter->SetInputData(&input);
+  filter->Update();
+  if (!messages.errors.empty())
+    return fail(ErrorCode::kAnalysisFailed, "mesh decimation (VTK): " + messages.errors);
+  auto result = from_vtk(*filter->GetOutput(), mesh);
+  if (!result) return result.error();
+  keep_isolated(mesh, *result);
+  result->input_triangles = mesh.triangles.size();
+  result->achieved_reduction =
+      1.0 - static_cast<double>(result->mesh.triangles.size()) / mesh.triangles.size();
+  result->max_deviation_mm = max_deviation(mesh, *result, settings.threads);
+  return result;
+}
+
+// The input as it is: within any error bound, for when no threshold met it.
+DecimationResult unreduced(const TriangleMesh& mesh, int attempts) {
+  DecimationResult result;
+  result.mesh = mesh;
+  result.kept.resize(mesh.vertices.size());
+  for (std::uint32_t i = 0; i < result.kept.size(); ++i) result.kept[i] = i;
+  result.input_triangles = mesh.triangles.size();
+  result.max_deviation_mm = 0.0;
+  result.attempts = attempts;
+  return result;
+}
+
+}  // namespace
+
+Expected<bool> validate(const DecimationSettings& s) {
+  if (!in_range(s.target_reduction, 0.0, 0.99))
+    return bad_setting("target_reduction", s.target_reduction, "0 to 0.99");
+  if (!in_range(s.feature_angle_deg, 1e-6, 180.0))
+    return bad_setting("feature_angle_deg", s.feature_angle_deg, "> 0 and <= 180");
+  if (!in_range(s.max_error_mm, 1e-9, 1000.0))
+    return bad_setting("max_error_mm", s.max_error_mm, "> 0 and <= 1000");
+  if (s.threads < 0 || s.threads > 1024)
+    return bad_setting("threads", s.threads, "0 to 1024; 0 = all cores");
+  return true;
+}
+
+Expected<bool> check_mesh(const TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) return fail("mesh: no triangles to decimate");
+  if (mesh.vertices.size() >= kMaxElements || mesh.triangles.size() >= kMaxElements)
+    return fail("mesh: " + std::to_string(mesh.vertices.size()) + " vertices and " +
+                std::to_string(mesh.triangles.size()) + " triangles (at most 2^31 each)");
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+    if (!mesh.vertices[i].allFinite())
+      return fail("mesh: vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    for (std::uint32_t v : tri)
+      if (v >= mesh.vertices.size())
+        return fail("mesh: triangle " + std::to_string(t) + " names vertex " + std::to_string(v) +
+                    ", past the " + std::to_string(mesh.vertices.size()) + " vertices");
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
+      return fail("mesh: triangle " + std::to_string(t) + " names vertex " +
+                  std::to_string(tri[0] == tri[1] ? tri[0] : tri[2]) + " twice");
+  }
+  return true;
+}
+
+Expected<DecimationResult> decimate_mesh(const TriangleMesh& mesh,
+                                         const DecimationSettings& settings) {
+  if (auto valid = validate(settings); !valid) return valid.error();
+  if (auto valid = check_mesh(mesh); !valid) return valid.error();
+  const auto input = to_vtk(mesh);
+  // VTK's accumulated error estimates the distance to the original surface but does not bound
+  // it (up to 4x over on a noisy bend). The bound is max_error_mm, measured on every deleted
+  // vertex: while it is exceeded, VTK's threshold shrinks by the excess and the run repeats.
+  double threshold_mm = settings.max_error_mm;
+  for (int attempt = 1; attempt <= kMaxAttempts; ++attempt) {
+    auto result = run_decimate_pro(*input, mesh, settings, threshold_mm);
+    if (!result) return result.error();
+    result->attempts = attempt;
+    result->vtk_error_mm = threshold_mm;
+    if (result->max_deviation_mm <= settings.max_error_mm) return result;
+    threshold_mm *= 0.8 * settings.max_error_mm / result->max_deviation_mm;
+  }
+  return unreduced(mesh, kMaxAttempts);
+}
+
+Expected<DecimatedScan> decimate_scan(const PointCloud& cloud, const Triangles& triangles,
+                                      const DecimationSettings& settings) {
+  TriangleMesh mesh;
+  mesh.vertices = cloud.points;
+  mesh.triangles = triangles;
+  auto result = decimate_mesh(mesh, settings);
+  if (!result) return result.error();
+  DecimatedScan out;
+  out.cloud = select(cloud, result->kept);
+  out.result = std::move(result).value();
+  return out;
+}
+
+}  // namespace springscan::analysis

@@ -1,0 +1,44 @@
+// TriangleBvh (analysis/core/triangle_bvh.hpp) against brute force.
+#include "analysis/core/triangle_bvh.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace springscan::analysis {
+namespace {
+
+// Two slivers sharing an edge, the query inside the second: its distance is a rounding error
+// whose square root squared is below it (the case that once lost the nearest triangle).
+TEST(TriangleBvh, NearestFindsTheTriangleThatContainsTheQuery) {
+  const std::vector<Vec3> v = {Vec3(21, 1, 0), Vec3(22, 1, 0), Vec3(30, 24, 0), Vec3(20, 1, 0)};
+  const TriangleBvh bvh(v, {{3, 0, 2}, {0, 1, 2}}, {.leaf_size = 1});
+  const auto foot = bvh.nearest(Vec3(23, 4, 0));
+  ASSERT_TRUE(foot);
+  EXPECT_EQ(foot->triangle, 1u);
+  EXPECT_LT(foot->squared_distance, 1e-20);
+}
+
+TEST(TriangleBvh, NearestMatchesBruteForceOnRandomTriangles) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  std::vector<Vec3> v;
+  std::vector<std::array<std::uint32_t, 3>> t;
+  for (std::uint32_t i = 0; i < 300; ++i) {
+    const Vec3 a(u(rng), u(rng), u(rng));
+    for (int k = 0; k < 3; ++k) v.push_back(a + 0.2 * Vec3(u(rng), u(rng), u(rng)));
+    t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
+  }
+  const TriangleBvh bvh(v, t);
+  EXPECT_FALSE(TriangleBvh().nearest(Vec3::Zero()));
+  for (int q = 0; q < 500; ++q) {
+    const Vec3 p(u(rng), u(rng), u(rng));
+    double best = 1e300;
+    for (const auto& tri : t)
+      best = std::min(best, closest_on_triangle(p, v[tri[0]], v[tri[1]], v[tri[2]]).squared_distance);
+    EXPECT_DOUBLE_EQ(bvh.nearest(p)->squared_distance, best);
+  }
+}
+
+}  // namespace
+}  // namespace springscan::analysis
