@@ -3,10 +3,13 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
+#include <array>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "analysis/cad/model.hpp"
 #include "analysis/cad/point_model.hpp"
@@ -76,6 +79,39 @@ analysis::Expected<analysis::PartModel> load_point_model(const std::string& path
   return std::move(model->model);
 }
 
+// The scan: its points, and with the mesh decimation on, the triangles too (a scanner's STL or
+// a PLY with faces). Without it, PLY faces are skipped unparsed, as they always were.
+struct LoadedScan {
+  analysis::PointCloud cloud;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+analysis::Expected<LoadedScan> load_scan(const std::string& path, bool as_mesh) {
+  if (!as_mesh) {
+    auto cloud = analysis::read_point_cloud(path);
+    if (!cloud) return cloud.error();
+    return LoadedScan{std::move(*cloud), {}};
+  }
+  auto surface = analysis::read_surface(path);
+  if (!surface) return surface.error();
+  if (surface->triangles.empty())
+    return analysis::fail(path +
+                          ": reduction.mesh_decimation is on but the scan has no "
+                          "triangles (decimation needs a mesh: STL, or PLY with faces)");
+  return LoadedScan{std::move(surface->cloud), std::move(surface->triangles)};
+}
+
+// One line on what the decimation did, before the verdict.
+void print_decimation(const analysis::MeshScanReduction& r) {
+  if (!r.decimated) return;
+  std::printf(
+      "mesh decimation: %zu -> %zu vertices, %zu -> %zu triangles (%.1f%% removed), max "
+      "deviation %.4f mm, %.0f ms\n",
+      r.vertices_in, r.vertices_out, r.triangles_in, r.triangles_out,
+      r.triangles_in ? 100.0 * (1.0 - static_cast<double>(r.triangles_out) / r.triangles_in) : 0.0,
+      r.max_deviation_mm, r.time_ms);
+}
+
 // The verdict and the figures a quality engineer looks at first, on stdout.
 void print_summary(const v1::InspectionReport& report, const std::string& out_dir,
                    bool compensation_files) {
@@ -105,13 +141,14 @@ void print_summary(const v1::InspectionReport& report, const std::string& out_di
 }  // namespace
 
 int analyze_main(int argc, char** argv) {
-  ArgParser args(kName,
-                 "springscan analyze --cad PART.igs --scan SCAN.ply --out DIR [--model MODEL.ply] "
-                 "[--settings FILE.textproto] [--tolerance MM] [--angle-tolerance DEG]",
-                 "Fits the scan to the part (PCA + ICP), measures the signed deviation of every "
-                 "scan point and writes DIR/report.json, DIR/report.pb and DIR/deviation.ply. "
-                 "Exit 0 when the analysis ran (whatever the verdict), 1 when it failed, 2 on "
-                 "bad usage or unreadable input.");
+  ArgParser args(
+      kName,
+      "springscan analyze --cad PART.igs --scan SCAN.ply --out DIR [--model MODEL.ply] "
+      "[--settings FILE.textproto] [--tolerance MM] [--angle-tolerance DEG] [--decimate]",
+      "Fits the scan to the part (PCA + ICP), measures the signed deviation of every "
+      "scan point and writes DIR/report.json, DIR/report.pb and DIR/deviation.ply. "
+      "Exit 0 when the analysis ran (whatever the verdict), 1 when it failed, 2 on "
+      "bad usage or unreadable input.");
   args.add_option("cad", "FILE", "the part: IGES or STEP (exact distances)");
   args.add_option("model", "FILE", "instead of --cad: model points (PLY, XYZ/CSV, STL)");
   args.add_option("scan", "FILE", "the scan: PLY, XYZ/CSV/TXT/PTS or STL, in mm");
@@ -119,6 +156,9 @@ int analyze_main(int argc, char** argv) {
   args.add_option("settings", "FILE", "AnalysisSettings in protobuf text format");
   args.add_option("tolerance", "MM", "surface tolerance (deviation and verdict)");
   args.add_option("angle-tolerance", "DEG", "springback tolerance per bend (verdict)");
+  args.add_switch("decimate",
+                  "the scan is a mesh (STL, PLY with faces): reduce it by mesh decimation first "
+                  "(reduction.mesh_decimation, docs/decimation.md)");
   Logger log;
   if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   for (const char* required : {"scan", "out"})
@@ -146,11 +186,14 @@ int analyze_main(int argc, char** argv) {
       settings.mutable_verdict()->set_angle_tolerance_deg(*value);
     }
   }
+  if (args.has("decimate"))
+    settings.mutable_reduction()->mutable_mesh_decimation()->set_enabled(true);
   if (auto verdict = analysis::verdict_settings_from_proto(settings); !verdict)
     return fail_with(kName, verdict.message(), kExitUsage);
 
   auto start = Clock::now();
-  auto scan = analysis::read_point_cloud(args.get("scan"));
+  const bool as_mesh = settings.reduction().mesh_decimation().enabled();
+  auto scan = load_scan(args.get("scan"), as_mesh);
   if (!scan) return fail_with(kName, scan.message(), kExitUsage);
   const double load_ms = ms_since(start);
   start = Clock::now();
@@ -158,10 +201,13 @@ int analyze_main(int argc, char** argv) {
                                : load_point_model(args.get("model"));
   if (!model) return fail_with(kName, model.message(), kExitUsage);
   const double model_ms = ms_since(start);
-  log.info("scan " + std::to_string(scan->size()) + " points, model " +
-           std::to_string(model->samples.size()) + " samples");
+  log.info("scan " + std::to_string(scan->cloud.size()) + " points" +
+           (as_mesh ? ", " + std::to_string(scan->triangles.size()) + " triangles" : "") +
+           ", model " + std::to_string(model->samples.size()) + " samples");
 
-  auto outcome = analysis::run_inspection(*model, *scan, settings);
+  auto outcome = as_mesh
+                     ? analysis::run_mesh_inspection(*model, scan->cloud, scan->triangles, settings)
+                     : analysis::run_inspection(*model, scan->cloud, settings);
   if (!outcome) return fail_with(kName, outcome.message(), kExitAnalysisFailed);
   v1::InspectionReport& report = outcome->report;
   report.mutable_input()->set_cad_file(args.get(args.has("cad") ? "cad" : "model"));
@@ -179,6 +225,7 @@ int analyze_main(int argc, char** argv) {
   auto written = report::write_inspection_files(args.get("out"), *outcome);
   if (!written) return fail_with(kName, written.message(), kExitUsage);
   if (!written->html_error.empty()) log.warning("report.html not written: " + written->html_error);
+  if (!args.has("quiet")) print_decimation(outcome->mesh_reduction);
   if (!args.has("quiet"))
     print_summary(report, args.get("out"), !outcome->compensation.vectors.empty());
   return kExitOk;

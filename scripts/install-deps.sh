@@ -9,6 +9,8 @@ packages=(
   libeigen3-dev libnanoflann-dev
   libocct-foundation-dev libocct-modeling-data-dev libocct-modeling-algorithms-dev
   libocct-data-exchange-dev libtbb-dev
+  # Mesh decimation (vtkDecimatePro; docs/decimation.md: why VTK, and what it costs to install).
+  libvtk9-dev
   libprotobuf-dev protobuf-compiler zlib1g-dev
   libusb-1.0-0-dev libmodbus-dev libsystemd-dev libmosquitto-dev
   libgtest-dev libgmock-dev libbenchmark-dev

@@ -26,6 +26,10 @@ violation "OpenCASCADE only in analysis/cad/ (and the test parts' profile solids
   "$(sources analysis drivers daemon report cli simulators |
      grep -vE '^(analysis/cad/|simulators/parts/cad_profile\.cpp)' |
      xargs grep -nE '#include <[A-Za-z0-9]+_[A-Za-z0-9_]*\.hxx>|#include <(gp|TopoDS|Standard)[A-Za-z_]*\.hxx>' || true)"
+violation "VTK only in analysis/preprocess/decimation.cpp (the mesh decimation's adapter)" \
+  "$(sources analysis drivers daemon report cli simulators |
+     grep -v '^analysis/preprocess/decimation\.cpp$' |
+     xargs grep -nE '#include <vtk[A-Za-z0-9_]*\.h>' || true)"
 violation "drivers/ use only analysis/core/" \
   "$(sources drivers | xargs grep -nE '#include "analysis/' | grep -v '"analysis/core/' || true)"
 violation "the product never includes the test parts (simulators/parts/)" \

@@ -32,9 +32,6 @@ using Triangles = std::vector<std::array<std::uint32_t, 3>>;
 constexpr const char* kInputIdName = "springscan_input_id";
 // vtkIdType is 64-bit in Debian's VTK, but our indices are 32-bit; 2^31 leaves room for both.
 constexpr std::size_t kMaxElements = std::size_t{1} << 31;
-// Runs with a tightened threshold before giving the mesh back unreduced (each run shrinks the
-// threshold by at least the measured excess; two are usually enough).
-constexpr int kMaxAttempts = 6;
 
 Error bad_setting(const std::string& field, double value, const std::string& rule) {
   return fail(ErrorCode::kInvalidSettings, "settings: reduction.mesh_decimation." + field + " = " +
@@ -90,14 +87,14 @@ vtkSmartPointer<vtkPolyData> to_vtk(const TriangleMesh& mesh) {
 // The paper's criterion (§2): distance to the average plane, absolute, accumulated over the
 // deletions so that it bounds the distance to the original surface; no splitting, so the
 // topology (holes, the contour) stays and no vertex is duplicated.
-void configure(vtkDecimatePro& filter, const DecimationSettings& s, double threshold_mm) {
+void configure(vtkDecimatePro& filter, const DecimationSettings& s) {
   filter.SetTargetReduction(s.target_reduction);
   filter.SetFeatureAngle(s.feature_angle_deg);
   filter.SetBoundaryVertexDeletion(s.boundary_vertex_deletion ? 1 : 0);
   filter.SetErrorIsAbsolute(1);
   // vtkDecimatePro queues squared distances (to the average plane, or to the line of a contour
   // or crease) and compares them with AbsoluteError as given: so the bound goes in squared.
-  filter.SetAbsoluteError(threshold_mm * threshold_mm);
+  filter.SetAbsoluteError(s.max_error_mm * s.max_error_mm);
   filter.AccumulateErrorOn();
   filter.PreserveTopologyOn();
   filter.SplittingOff();
@@ -166,17 +163,16 @@ double max_deviation(const TriangleMesh& in, const DecimationResult& result, int
     }
     block_max[b] = worst;
   });
-  const double worst = block_max.empty() ? 0.0 : *std::max_element(block_max.begin(), block_max.end());
+  const double worst =
+      block_max.empty() ? 0.0 : *std::max_element(block_max.begin(), block_max.end());
   return std::sqrt(worst);
 }
 
-// One vtkDecimatePro run with VTK's own error threshold `threshold_mm`, and the distance of the
-// deleted vertices to its result.
+// One vtkDecimatePro run, and the distance of the deleted vertices to its result.
 Expected<DecimationResult> run_decimate_pro(vtkPolyData& input, const TriangleMesh& mesh,
-                                            const DecimationSettings& settings,
-                                            double threshold_mm) {
+                                            const DecimationSettings& settings) {
   vtkNew<vtkDecimatePro> filter;
-  configure(*filter, settings, threshold_mm);
+  configure(*filter, settings);
   VtkMessages messages;
   vtkNew<vtkCallbackCommand> observer;
   observer->SetClientData(&messages);
@@ -194,18 +190,6 @@ Expected<DecimationResult> run_decimate_pro(vtkPolyData& input, const TriangleMe
   result->achieved_reduction =
       1.0 - static_cast<double>(result->mesh.triangles.size()) / mesh.triangles.size();
   result->max_deviation_mm = max_deviation(mesh, *result, settings.threads);
-  return result;
-}
-
-// The input as it is: within any error bound, for when no threshold met it.
-DecimationResult unreduced(const TriangleMesh& mesh, int attempts) {
-  DecimationResult result;
-  result.mesh = mesh;
-  result.kept.resize(mesh.vertices.size());
-  for (std::uint32_t i = 0; i < result.kept.size(); ++i) result.kept[i] = i;
-  result.input_triangles = mesh.triangles.size();
-  result.max_deviation_mm = 0.0;
-  result.attempts = attempts;
   return result;
 }
 
@@ -249,19 +233,7 @@ Expected<DecimationResult> decimate_mesh(const TriangleMesh& mesh,
   if (auto valid = validate(settings); !valid) return valid.error();
   if (auto valid = check_mesh(mesh); !valid) return valid.error();
   const auto input = to_vtk(mesh);
-  // VTK's accumulated error estimates the distance to the original surface but does not bound
-  // it (up to 4x over on a noisy bend). The bound is max_error_mm, measured on every deleted
-  // vertex: while it is exceeded, VTK's threshold shrinks by the excess and the run repeats.
-  double threshold_mm = settings.max_error_mm;
-  for (int attempt = 1; attempt <= kMaxAttempts; ++attempt) {
-    auto result = run_decimate_pro(*input, mesh, settings, threshold_mm);
-    if (!result) return result.error();
-    result->attempts = attempt;
-    result->vtk_error_mm = threshold_mm;
-    if (result->max_deviation_mm <= settings.max_error_mm) return result;
-    threshold_mm *= 0.8 * settings.max_error_mm / result->max_deviation_mm;
-  }
-  return unreduced(mesh, kMaxAttempts);
+  return run_decimate_pro(*input, mesh, settings);
 }
 
 Expected<DecimatedScan> decimate_scan(const PointCloud& cloud, const Triangles& triangles,

@@ -20,14 +20,17 @@
 namespace springscan::analysis {
 
 struct DecimationSettings {
-  bool enabled = false;            ///< the pipeline decimates mesh scans only when set
-  double target_reduction = 0.9;   ///< share of the triangles to remove, [0, 0.99]
-  double feature_angle_deg = 15.0;  ///< dihedral angle above which an edge is a feature
-                                    ///< (a crease the decimation keeps), (0, 180]
+  bool enabled = false;                   ///< the pipeline decimates mesh scans only when set
+  double target_reduction = 0.9;          ///< share of the triangles to remove, [0, 0.99]
+  double feature_angle_deg = 15.0;        ///< dihedral angle above which an edge is a feature
+                                          ///< (a crease the decimation keeps), (0, 180]
   bool boundary_vertex_deletion = false;  ///< allow deleting contour vertices (paper: never)
-  /// The bound on the distance of every deleted vertex to the reduced mesh, mm, in (0, 1000].
-  /// VTK's own threshold starts here and shrinks until the measured distance meets it; the
-  /// reduction stops short of target_reduction where needed.
+  /// The decimation criterion, mm, in (0, 1000]: a vertex is deleted only while its distance to
+  /// its average plane (to the line, on a crease), accumulated over the deletions around it,
+  /// is below this. The reduction stops short of target_reduction where needed. On a
+  /// noise-free surface it bounds the distance of the reduced mesh to the scanned points; on a
+  /// noisy scan that distance exceeds it by up to a few noise sigmas (the re-triangulation
+  /// joins noisy neighbours), see DecimationResult::max_deviation_mm.
   double max_error_mm = 0.05;
   int threads = 0;  ///< for the error measurement; 0: all cores (the result does not depend on it)
 };
@@ -41,12 +44,9 @@ struct DecimationResult {
   std::size_t input_triangles = 0;    ///< triangles in
   std::size_t isolated_vertices = 0;  ///< input vertices in no triangle: kept as they are
   double achieved_reduction = 0.0;    ///< 1 - triangles out / triangles in
-  /// The largest distance of a deleted vertex to the reduced mesh, mm, measured (how far the
-  /// reduced surface is from the scanned points); at most max_error_mm.
+  /// The largest distance of a deleted vertex to the reduced mesh, mm, measured afterwards:
+  /// how far the reduced surface is from the scanned points.
   double max_deviation_mm = 0.0;
-  int attempts = 0;           ///< vtkDecimatePro runs (the threshold shrinks after each miss)
-  double vtk_error_mm = 0.0;  ///< VTK's threshold in the run kept (0: none met the bound, the
-                              ///< mesh is returned unreduced)
 };
 
 /// Checks a mesh before decimation: at least one triangle, finite vertices, indices in range,

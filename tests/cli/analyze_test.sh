@@ -2,8 +2,8 @@
 # springscan analyze end to end on the bundled demo pair (demo/README.md): the springback of
 # every bend against the demo's constructed truth (1.5, 0.8, 1.1 and 0.4 degrees, bends 0 to 3;
 # docs/springback.md gives 0.1 degree at this noise), every file of docs/report-format.md
-# written, the report stamped with the version and time, --quiet quiet, and a broken scan
-# refused with exit 2 and the file's name.
+# written, the report stamped with the version and time, --quiet quiet, a broken scan
+# refused with exit 2 and the file's name, and --decimate on a mesh scan and on a point scan.
 #   analyze_test.sh SPRINGSCAN_BINARY DEMO_DIR
 set -euo pipefail
 bin=$1
@@ -46,4 +46,16 @@ status=0
 check '[[ $status -eq 2 ]]'
 check 'grep -q "cut.ply" "$tmp/cut.stderr"'
 check 'test ! -e "$tmp/cut/report.json"'
+# --decimate: a mesh scan (here the compensated CAD tessellation the first run wrote, an STL)
+# is reduced by mesh decimation and analysed; a point scan is refused with exit 2.
+"$bin" analyze --cad "$demo/hat-profile.step" --scan "$tmp/out/compensated-surface.stl" \
+  --decimate --out "$tmp/mesh" >"$tmp/mesh.stdout" 2>"$tmp/mesh.stderr"
+check 'grep -q "^mesh decimation: [0-9]* -> [0-9]* vertices" "$tmp/mesh.stdout"'
+check 'grep -q "^verdict: " "$tmp/mesh.stdout"'
+check 'test -s "$tmp/mesh/report.json"'
+status=0
+"$bin" analyze --cad "$demo/hat-profile.step" --scan "$demo/hat-profile-scan.ply" --decimate \
+  --out "$tmp/points" 2>"$tmp/points.stderr" >/dev/null || status=$?
+check '[[ $status -eq 2 ]]'
+check 'grep -q "has no triangles" "$tmp/points.stderr"'
 echo "analyze: OK"

@@ -35,7 +35,8 @@ TEST(TriangleBvh, NearestMatchesBruteForceOnRandomTriangles) {
     const Vec3 p(u(rng), u(rng), u(rng));
     double best = 1e300;
     for (const auto& tri : t)
-      best = std::min(best, closest_on_triangle(p, v[tri[0]], v[tri[1]], v[tri[2]]).squared_distance);
+      best =
+          std::min(best, closest_on_triangle(p, v[tri[0]], v[tri[1]], v[tri[2]]).squared_distance);
     EXPECT_DOUBLE_EQ(bvh.nearest(p)->squared_distance, best);
   }
 }
