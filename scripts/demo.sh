@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # The station demo: springscand with the simulated laser scanner (an emulated USB device, so
 # the production libusb driver runs) and the simulated PLC (a Modbus TCP client on loopback).
-# The PLC triggers one inspection of the bundled demo part (demo/README.md); the daemon scans,
-# analyses against demo/hat-profile.step, stores the report and answers on the register map.
-# Prints the verdict and where the report is. Installs and builds what is missing first.
+# The PLC triggers one inspection of a production part, the bundled motor bracket (demo/README.md:
+# a 2 mm hat bracket with four 90 degree bends, as produced with a known springback per bend);
+# the daemon scans it, analyses against demo/motor-bracket.step, stores the report and answers
+# on the register map. Prints the verdict, every bend beside its truth, and where the report is.
+# Installs and builds what is missing first.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/install-deps.sh"
@@ -12,8 +14,10 @@ bin="$root/build"
 out="$root/out/demo"
 rm -rf "$out" && mkdir -p "$out"
 
-# The part as produced (springback 1.5, 0.8, 1.1, 0.4 deg) for the simulated scanner to measure.
-"$bin/simulators/springscan-demo-part" --surface "$out/produced-surface.ply"
+# The bracket as produced (springback 1.5, 0.8, 1.1, 0.4 deg at bends 0 to 3), the surface the
+# simulated scanner measures, and its truth (produced-surface-truth.json).
+"$bin/simulators/springscan-demo-part" --production "$root/demo/motor-bracket.step" \
+  --springback 1.5,0.8,1.1,0.4 --surface "$out/produced-surface.ply" >/dev/null
 
 port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 cat > "$out/springscand.textproto" <<CONFIG
@@ -22,8 +26,8 @@ modbus { bind_address: "127.0.0.1" port: $port allowed_clients: "127.0.0.1" }
 scanner { kind: LASER_LINE timeout_s: 5 }
 parts {
   part_id: 1
-  name: "demo hat profile"
-  cad_file: "$root/demo/hat-profile.step"
+  name: "motor bracket"
+  cad_file: "$root/demo/motor-bracket.step"
   settings { verdict { tolerance_mm: 0.5 angle_tolerance_deg: 1.0 } }
 }
 report_dir: "$out/reports"
@@ -31,9 +35,12 @@ model_cache_dir: "$out/model-cache"
 log_level: "info"
 CONFIG
 
-# The scanner simulator presents the device and runs the daemon under it (docs/device-protocol.md).
+# The scanner simulator presents the device and runs the daemon under it (docs/device-protocol.md):
+# a dual-head laser line scanner, heads tilted by +-30 degrees about the travel, since the
+# bracket's walls are vertical and a head looking straight down gets no return from them.
 setsid "$bin/simulators/springscan-scanner-sim" --part "$out/produced-surface.ply" --noise 0.02 \
-  --step 0.5 --points 400 --duration 1 -- "$bin/daemon/springscand" --config "$out/springscand.textproto" \
+  --step 0.5 --points 400 --head-tilt 30 --duration 1 \
+  -- "$bin/daemon/springscand" --config "$out/springscand.textproto" \
   >"$out/station.log" 2>&1 &
 station=$!
 stop_station() { kill -TERM -- "-$station" 2>/dev/null || true; wait "$station" 2>/dev/null || true; }
@@ -53,15 +60,21 @@ trap - EXIT
 report=$(ls -d "$out"/reports/r* | tail -n 1)
 echo "== station log: $out/station.log"
 echo "== report: $report/report.html (report.json, report.pb, deviation.ply beside it)"
-python3 - "$report/report.json" <<'PY'
+python3 - "$report/report.json" "$out/produced-surface-truth.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
+truth = {b["id"]: b["springback_deg"] for b in json.load(open(sys.argv[2]))["bends"]}
 v = r["verdict"]
 print("verdict:", "PASS" if v.get("pass") else "FAIL")
 for reason in v.get("reasons", []):
     print("  -", reason)
 for b in r.get("bends", []):
-    print("bend %d: nominal %.2f deg, measured %.2f deg, springback %+.3f deg" % (
-        b.get("id", 0), b.get("nominal_angle_deg", 0), b.get("measured_angle_deg", 0),
-        b.get("springback_deg", 0)))
+    i = b.get("id", 0)
+    if not b.get("measured"):
+        print("bend %d: nominal %.2f deg, not measured (the report's warnings say why)" % (
+            i, b.get("nominal_angle_deg", 0)))
+        continue
+    print("bend %d: nominal %.2f deg, measured %.2f deg, springback %+.3f deg (built in: %.3f)" % (
+        i, b.get("nominal_angle_deg", 0), b.get("measured_angle_deg", 0),
+        b.get("springback_deg", 0), truth.get(i, float("nan"))))
 PY

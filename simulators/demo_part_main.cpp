@@ -3,7 +3,8 @@
 // the part as produced, with a known springback per bend, noise and a pose the analysis must
 // recover. demo/README.md records the command and the ground truth. With --production CAD it
 // writes any segmented CAD part (e.g. the openamr motor bracket) as produced and laser-scanned
-// from above (simulators/parts/produced_part.hpp, laser_scan.hpp), with its truth as JSON.
+// from above (simulators/parts/produced_part.hpp, laser_scan.hpp), with its truth as JSON; with
+// --surface FILE as well, the produced part's seen surface for the scanner simulator instead.
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -171,37 +172,59 @@ Expected<LaserScan> scan_passes(const ProducedPart& part, LaserScanSettings sett
   return merged;
 }
 
-// The CAD part as produced, scanned from above: OUT/<name>-scan.ply and OUT/<name>-truth.json.
-int write_production_part(const DemoOptions& options) {
+// A CAD part as produced and scanned: the part with its bends' truth, the merged passes.
+struct ProducedScan {
+  ProducedPart part;
+  LaserScan scan;
+  LaserScanSettings settings;
+};
+
+Expected<ProducedScan> produce_and_scan(const DemoOptions& options, LaserScanSettings settings) {
   auto cad = load_cad_part(options.production_cad);
-  if (!cad) {
-    std::cerr << "springscan-demo-part: " << cad.message() << '\n';
-    return 1;
-  }
+  if (!cad) return cad.error();
   const std::size_t bends = cad->model.segmentation.bends.size();
   const auto springback =
       options.springback_given ? options.springback_deg : production_springback(bends);
   auto part = make_produced_part(cad->model, cad->shape, springback);
-  if (!part) {
-    std::cerr << "springscan-demo-part: " << part.message() << '\n';
-    return 1;
-  }
+  if (!part) return part.error();
+  auto scan = scan_passes(*part, settings, options.tilt_deg);
+  if (!scan) return scan.error();
+  return ProducedScan{std::move(*part), std::move(*scan), settings};
+}
+
+int write_truth_file(const std::string& path, const DemoOptions& options, const ProducedScan& p) {
+  std::ofstream truth(path);
+  write_truth(truth, options.production_cad, p.part, p.scan, p.settings, options.tilt_deg);
+  if (truth) return 0;
+  std::cerr << "springscan-demo-part: cannot write " << path << '\n';
+  return 1;
+}
+
+void print_written(const std::string& what, const ProducedScan& p, const std::string& truth) {
+  std::cout << "wrote " << what << " (" << p.scan.cloud.size() << " points) and " << truth << " ("
+            << p.part.bends.size() << " bends";
+  for (const auto& warning : p.part.report.warnings) std::cout << "; " << warning;
+  std::cout << ")\n";
+}
+
+// The CAD part as produced, scanned from above: OUT/<name>-scan.ply and OUT/<name>-truth.json.
+int write_production_part(const DemoOptions& options) {
   LaserScanSettings settings;
   settings.point_count = options.points > 0 ? options.points : 200000;
   settings.noise_sigma_mm = options.noise_mm;
   settings.outlier_fraction = 0.005;
   settings.T_scan_part = demo_pose();
-  auto scan = scan_passes(*part, settings, options.tilt_deg);
-  if (!scan) {
-    std::cerr << "springscan-demo-part: " << scan.message() << '\n';
+  auto produced = produce_and_scan(options, settings);
+  if (!produced) {
+    std::cerr << "springscan-demo-part: " << produced.message() << '\n';
     return 1;
   }
   const std::string name = std::filesystem::path(options.production_cad).stem().string();
   const std::string scan_path = options.out_dir + "/" + name + "-scan.ply";
   const std::string truth_path = options.out_dir + "/" + name + "-truth.json";
   PointCloud cloud;
-  cloud.points = scan->cloud.points;
-  for (int f : scan->cloud.face_ids) cloud.scalars.push_back(f);
+  cloud.points = produced->scan.cloud.points;
+  for (int f : produced->scan.cloud.face_ids) cloud.scalars.push_back(f);
   PointWriteOptions write_options;
   write_options.single_precision = true;
   write_options.scalar_name = "face_id";
@@ -209,22 +232,44 @@ int write_production_part(const DemoOptions& options) {
     std::cerr << "springscan-demo-part: " << written.message() << '\n';
     return 1;
   }
-  std::ofstream truth(truth_path);
-  write_truth(truth, options.production_cad, *part, *scan, settings, options.tilt_deg);
-  if (!truth) {
-    std::cerr << "springscan-demo-part: cannot write " << truth_path << '\n';
+  if (int status = write_truth_file(truth_path, options, *produced)) return status;
+  print_written(scan_path, *produced, truth_path);
+  return 0;
+}
+
+// The CAD part as produced, as the surface the simulated scanner measures (springscan-scanner-sim
+// --part FILE): what the passes see of it, dense, noise-free, in the part frame; its truth
+// beside it (FILE's stem + "-truth.json").
+int write_production_surface(const DemoOptions& options) {
+  LaserScanSettings settings;
+  settings.point_count = options.points > 0 ? options.points : 600000;
+  settings.noise_sigma_mm = 0.0;  // the scanner simulator adds its own noise along its rays
+  auto produced = produce_and_scan(options, settings);
+  if (!produced) {
+    std::cerr << "springscan-demo-part: " << produced.message() << '\n';
     return 1;
   }
-  std::cout << "wrote " << scan_path << " (" << scan->cloud.size() << " points) and " << truth_path
-            << " (" << bends << " bends";
-  for (const auto& warning : part->report.warnings) std::cout << "; " << warning;
-  std::cout << ")\n";
+  PointCloud cloud;
+  cloud.points = produced->scan.cloud.points;
+  PointWriteOptions write_options;
+  write_options.single_precision = true;
+  if (auto written = write_point_cloud(options.surface_path, cloud, write_options); !written) {
+    std::cerr << "springscan-demo-part: " << written.message() << '\n';
+    return 1;
+  }
+  const std::filesystem::path surface(options.surface_path);
+  const std::string truth_path =
+      (surface.parent_path() / (surface.stem().string() + "-truth.json")).string();
+  if (int status = write_truth_file(truth_path, options, *produced)) return status;
+  print_written(options.surface_path, *produced, truth_path);
   return 0;
 }
 
 int run(const DemoOptions& options) {
+  if (!options.production_cad.empty())
+    return options.surface_path.empty() ? write_production_part(options)
+                                        : write_production_surface(options);
   if (!options.surface_path.empty()) return write_surface(options);
-  if (!options.production_cad.empty()) return write_production_part(options);
   const ProfileSpec spec = demo_profile();
   const std::string cad_path = options.out_dir + "/hat-profile.step";
   if (auto written = write_profile_cad(spec, cad_path); !written) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace springscan::simulators {
 namespace {
@@ -22,9 +23,12 @@ double disturb(double value, const NoiseSettings& noise, std::mt19937& rng) {
 
 }  // namespace
 
-std::vector<SimulatedProfile> laser_profiles(const analysis::PointCloud& surface,
-                                             const LaserPatternSettings& s,
-                                             const NoiseSettings& noise, std::mt19937& rng) {
+namespace {
+
+// One head: profiles in its own frame (calibration c).
+std::vector<SimulatedProfile> head_profiles(const analysis::PointCloud& surface,
+                                            const LaserPatternSettings& s,
+                                            const NoiseSettings& noise, std::mt19937& rng) {
   std::vector<SimulatedProfile> profiles;
   const auto& c = s.calibration;
   const double m2 = c.motion_axis.squaredNorm();
@@ -72,6 +76,45 @@ std::vector<SimulatedProfile> laser_profiles(const analysis::PointCloud& surface
     }
   }
   return profiles;
+}
+
+// The head's calibration turned by `tilt_rad` about the motion axis (its laser plane stays the
+// primary head's plane, so its readings convert exactly into the primary frame).
+drivers::LaserCalibration tilted(const drivers::LaserCalibration& c, double tilt_rad) {
+  const Eigen::AngleAxisd turn(tilt_rad, c.motion_axis.normalized());
+  drivers::LaserCalibration head = c;
+  head.x_axis = turn * c.x_axis;
+  head.z_axis = turn * c.z_axis;
+  return head;
+}
+
+// Re-expresses a tilted head's readings in the primary head's (x, z): same origin and plane.
+void to_primary(std::vector<SimulatedProfile>& profiles, const drivers::LaserCalibration& head,
+                const drivers::LaserCalibration& primary) {
+  for (auto& profile : profiles)
+    for (auto& p : profile.points) {
+      if (std::isnan(p.z_mm)) continue;
+      const Vec3 local = double(p.x_mm) * head.x_axis + double(p.z_mm) * head.z_axis;
+      p = {float(local.dot(primary.x_axis)), float(local.dot(primary.z_axis))};
+    }
+}
+
+}  // namespace
+
+std::vector<SimulatedProfile> laser_profiles(const analysis::PointCloud& surface,
+                                             const LaserPatternSettings& s,
+                                             const NoiseSettings& noise, std::mt19937& rng) {
+  if (s.head_tilt_deg == 0.0) return head_profiles(surface, s, noise, rng);
+  std::vector<SimulatedProfile> all;
+  for (double sign : {1.0, -1.0}) {
+    LaserPatternSettings head = s;
+    head.calibration = tilted(s.calibration, sign * s.head_tilt_deg * std::numbers::pi / 180.0);
+    auto profiles = head_profiles(surface, head, noise, rng);
+    to_primary(profiles, head.calibration, s.calibration);
+    all.insert(all.end(), std::make_move_iterator(profiles.begin()),
+               std::make_move_iterator(profiles.end()));
+  }
+  return all;
 }
 
 std::vector<drivers::ProbeRecord> probe_grid(const analysis::PointCloud& surface,

@@ -28,6 +28,11 @@ struct LaserPatternSettings {
   double step_mm = 1.0;                   ///< encoder travel between profiles
   int points_per_profile = 256;           ///< bins across the laser line, 1..4096
   double slice_half_thickness_mm = 0.25;  ///< surface points this close to the plane are seen
+  /// > 0: a dual-head line scanner, two heads tilted by +-this about the motion axis (both in
+  /// the laser plane of `calibration`), each seeing what faces it, both heads' points sent in
+  /// the primary head's frame (the device merges them); 0: the one head of `calibration`.
+  /// A part's walls parallel to the view give no return to one head looking straight down.
+  double head_tilt_deg = 0.0;
 };
 
 struct ProbePatternSettings {
@@ -45,7 +50,8 @@ struct SimulatedProfile {
 };
 
 /// Profiles covering the part along the motion axis. Each bin across the line keeps the
-/// surface point nearest to the sensor (occlusion); empty bins are NaN.
+/// surface point nearest to the sensor (occlusion); empty bins are NaN. With two heads, the
+/// second head's profiles follow the first's (same encoder positions).
 std::vector<SimulatedProfile> laser_profiles(const analysis::PointCloud& surface,
                                              const LaserPatternSettings& settings,
                                              const NoiseSettings& noise, std::mt19937& rng);

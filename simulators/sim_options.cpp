@@ -41,6 +41,7 @@ std::map<std::string, double*> number_options(SimOptions& o) {
           {"missing", &d.noise.missing_fraction},
           {"duration", &d.scan_duration_s},
           {"step", &d.laser.step_mm},
+          {"head-tilt", &d.laser.head_tilt_deg},
           {"grid", &d.probe.grid_step_mm},
           {"unplug-at", &d.faults.unplug_at_fraction},
           {"stall-at", &d.faults.stall_at_fraction},
@@ -67,6 +68,8 @@ std::string sim_usage() {
          "  --outliers F, --missing F   shares of outliers and missing points\n"
          "  --duration S            scan duration (default 0: as fast as read)\n"
          "  --step MM, --points N   laser: profile spacing, points per profile\n"
+         "  --head-tilt DEG         laser: two heads tilted by +-DEG about the motion axis\n"
+         "                          (default 0: one head looking straight down)\n"
          "  --grid MM, --stylus MM  tactile: grid spacing, stylus radius\n"
          "  --unplug-at F, --stall-at F, --halt-at F, --corrupt-at F, --wrong-seq-at F,\n"
          "  --skip-frame-at F\n"
@@ -126,6 +129,8 @@ analysis::Expected<SimOptions> parse_sim_options(int argc, char** argv) {
       static_cast<std::uint16_t>(o.device.laser.points_per_profile);
   if (!(o.device.laser.step_mm > 0.0) || !(o.device.probe.grid_step_mm > 0.0))
     return fail("--step and --grid must be positive");
+  if (!(o.device.laser.head_tilt_deg >= 0.0 && o.device.laser.head_tilt_deg <= 60.0))
+    return fail("--head-tilt " + std::to_string(o.device.laser.head_tilt_deg) + ": 0 to 60");
   return o;
 }
 

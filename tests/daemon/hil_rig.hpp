@@ -1,9 +1,9 @@
 #pragma once
 // The hardware-in-the-loop rig: springscand as a real child process (daemon_process.hpp) under
 // the scanner simulator presented as a USB device by umockdev in this test process, with the
-// bundled demo part of the station demo (scripts/demo.sh, demo/README.md): the nominal CAD is
-// demo/hat-profile.step, the simulated scanner measures the same hat profile as produced with a
-// springback per bend that each test chooses (the ground truth), over its whole surface.
+// bundled demo hat (demo/README.md): the nominal CAD is demo/hat-profile.step, the simulated
+// scanner measures the same hat profile as produced with a springback per bend that each test
+// chooses (the ground truth), over its whole surface.
 //
 // This test executable links libumockdev-preload (like the driver tests), so the emulator's
 // uevents (unplug, replug) resolve their /sys paths and reach the daemon's libusb hotplug.

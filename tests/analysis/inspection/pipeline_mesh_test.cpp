@@ -49,10 +49,11 @@ MeshScan scan_mesh(const ProfileSpec& nominal, const std::vector<double>& spring
   }
   std::mt19937 rng(11);
   std::normal_distribution<double> noise(0.0, sigma_mm);
-  const Transform T_scan_part =
-      Eigen::Translation3d(120, -60, 280) * Eigen::AngleAxisd(25 * kDeg, Vec3(1, 2, -1).normalized());
+  const Transform T_scan_part = Eigen::Translation3d(120, -60, 280) *
+                                Eigen::AngleAxisd(25 * kDeg, Vec3(1, 2, -1).normalized());
   for (std::size_t i = 0; i < grid.points.size(); ++i)
-    scan.cloud.points.push_back(T_scan_part * (grid.points[i] + noise(rng) * normals[i].normalized()));
+    scan.cloud.points.push_back(T_scan_part *
+                                (grid.points[i] + noise(rng) * normals[i].normalized()));
   return scan;
 }
 
@@ -94,11 +95,12 @@ TEST(PipelineMesh, DecimatedMeshMeasuresTheBendsOfTheFullScan) {
     EXPECT_NEAR(a.springback_deg(), springback[b], 0.05) << "bend " << b;
     EXPECT_NEAR(d.springback_deg(), springback[b], 0.05) << "bend " << b;
   }
-  std::printf("mesh scan: %zu vertices -> %zu (%.1f%% triangles removed), max deviation %.4f mm, "
-              "%.1f ms\n",
-              r.vertices_in, r.vertices_out,
-              100.0 * (1.0 - static_cast<double>(r.triangles_out) / r.triangles_in),
-              r.max_deviation_mm, r.time_ms);
+  std::printf(
+      "mesh scan: %zu vertices -> %zu (%.1f%% triangles removed), max deviation %.4f mm, "
+      "%.1f ms\n",
+      r.vertices_in, r.vertices_out,
+      100.0 * (1.0 - static_cast<double>(r.triangles_out) / r.triangles_in), r.max_deviation_mm,
+      r.time_ms);
   for (int b = 0; b < 4; ++b)
     std::printf("bend %d: full %.4f deg, decimated %.4f deg (truth %.4f)\n", b,
                 full->report.bends(b).measured_angle_deg(),
