@@ -19,7 +19,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "analysis/core/parallel.hpp"
 #include "analysis/core/triangle_bvh.hpp"
@@ -32,6 +34,9 @@ using Triangles = std::vector<std::array<std::uint32_t, 3>>;
 constexpr const char* kInputIdName = "springscan_input_id";
 // vtkIdType is 64-bit in Debian's VTK, but our indices are 32-bit; 2^31 leaves room for both.
 constexpr std::size_t kMaxElements = std::size_t{1} << 31;
+// Beyond this no scan is in mm, and VTK's tolerances (a fraction of the bounding box) and
+// squared errors lose all precision.
+constexpr double kMaxCoordinateMm = 1e9;
 
 Error bad_setting(const std::string& field, double value, const std::string& rule) {
   return fail(ErrorCode::kInvalidSettings, "settings: reduction.mesh_decimation." + field + " = " +
@@ -119,10 +124,18 @@ Expected<DecimationResult> from_vtk(vtkPolyData& out, const TriangleMesh& in) {
     if (count != 3) return fail(ErrorCode::kInternal, "mesh decimation: VTK returned a polygon");
     std::array<std::uint32_t, 3> triangle{};
     for (int c = 0; c < 3; ++c) {
-      std::uint32_t& slot = output_index[static_cast<std::size_t>(corners[c])];
+      // VTK has been seen (fuzzing) to return corner -1 on degenerate input: refuse, never index.
+      const vtkIdType corner = corners[c];
+      const vtkIdType input =
+          corner >= 0 && corner < out.GetNumberOfPoints() ? ids->GetValue(corner) : -1;
+      if (input < 0 || static_cast<std::size_t>(input) >= in.vertices.size())
+        return fail(ErrorCode::kAnalysisFailed,
+                    "mesh decimation: VTK returned a triangle with vertex " +
+                        std::to_string(corner) + " (a degenerate mesh?)");
+      std::uint32_t& slot = output_index[static_cast<std::size_t>(corner)];
       if (slot == std::numeric_limits<std::uint32_t>::max()) {
         slot = static_cast<std::uint32_t>(result.kept.size());
-        result.kept.push_back(static_cast<std::uint32_t>(ids->GetValue(corners[c])));
+        result.kept.push_back(static_cast<std::uint32_t>(input));
       }
       triangle[static_cast<std::size_t>(c)] = slot;
     }
@@ -207,14 +220,63 @@ Expected<bool> validate(const DecimationSettings& s) {
   return true;
 }
 
+namespace {
+
+// vtkDecimatePro needs an oriented manifold: every directed edge (u to v) in at most one
+// triangle, and no two triangles on the same three vertices (either winding). A repeated
+// triangle, triangles wound against their neighbours, or a third triangle on an edge break
+// that, and VTK then crashes (GetCellEdgeNeighbors, RemoveReferenceToCell; found by fuzzing)
+// instead of reporting it.
+std::optional<Error> find_repeated_triangle(const Triangles& triangles) {
+  std::vector<std::pair<std::array<std::uint32_t, 3>, std::size_t>> sorted;
+  sorted.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    auto key = triangles[t];
+    std::sort(key.begin(), key.end());
+    sorted.emplace_back(key, t);
+  }
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i)
+    if (sorted[i].first == sorted[i - 1].first)
+      return fail("mesh: triangles " + std::to_string(sorted[i - 1].second) + " and " +
+                  std::to_string(sorted[i].second) + " have the same three vertices");
+  return std::nullopt;
+}
+
+std::optional<Error> find_repeated_edge(const Triangles& triangles) {
+  std::vector<std::pair<std::uint64_t, std::size_t>> edges;
+  edges.reserve(3 * triangles.size());
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (std::size_t c = 0; c < 3; ++c)
+      edges.emplace_back(std::uint64_t{triangles[t][c]} << 32 | triangles[t][(c + 1) % 3], t);
+  std::sort(edges.begin(), edges.end());
+  for (std::size_t i = 1; i < edges.size(); ++i) {
+    if (edges[i].first != edges[i - 1].first) continue;
+    const std::uint64_t edge = edges[i].first;
+    return fail("mesh: triangles " + std::to_string(edges[i - 1].second) + " and " +
+                std::to_string(edges[i].second) + " both run edge " + std::to_string(edge >> 32) +
+                "-" + std::to_string(edge & 0xFFFFFFFFu) +
+                " the same way (a repeated triangle, inconsistent winding, or more than two "
+                "triangles on one edge)");
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 Expected<bool> check_mesh(const TriangleMesh& mesh) {
   if (mesh.triangles.empty()) return fail("mesh: no triangles to decimate");
   if (mesh.vertices.size() >= kMaxElements || mesh.triangles.size() >= kMaxElements)
     return fail("mesh: " + std::to_string(mesh.vertices.size()) + " vertices and " +
                 std::to_string(mesh.triangles.size()) + " triangles (at most 2^31 each)");
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
     if (!mesh.vertices[i].allFinite())
       return fail("mesh: vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
+    if (mesh.vertices[i].cwiseAbs().maxCoeff() > kMaxCoordinateMm)
+      return fail("mesh: vertex " + std::to_string(i) + " lies " +
+                  std::to_string(mesh.vertices[i].cwiseAbs().maxCoeff()) +
+                  " mm out (more than 1e9 mm: not a scan in mm)");
+  }
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const auto& tri = mesh.triangles[t];
     for (std::uint32_t v : tri)
@@ -225,6 +287,8 @@ Expected<bool> check_mesh(const TriangleMesh& mesh) {
       return fail("mesh: triangle " + std::to_string(t) + " names vertex " +
                   std::to_string(tri[0] == tri[1] ? tri[0] : tri[2]) + " twice");
   }
+  if (auto repeated = find_repeated_triangle(mesh.triangles)) return *repeated;
+  if (auto repeated = find_repeated_edge(mesh.triangles)) return *repeated;
   return true;
 }
 

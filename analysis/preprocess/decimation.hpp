@@ -49,9 +49,11 @@ struct DecimationResult {
   double max_deviation_mm = 0.0;
 };
 
-/// Checks a mesh before decimation: at least one triangle, finite vertices, indices in range,
-/// no triangle that names a vertex twice, fewer than 2^31 vertices and triangles. Errors are
-/// kInvalidInput and name the triangle or vertex and the value.
+/// Checks a mesh before decimation: at least one triangle, finite vertices within 1e9 mm,
+/// indices in range, no triangle that names a vertex twice, an oriented manifold (no directed
+/// edge in two triangles: no repeated triangle, no inconsistent winding, at most two triangles
+/// on an edge), fewer than 2^31 vertices and triangles. Errors are kInvalidInput and name the
+/// triangle or vertex and the value. O(n log n).
 Expected<bool> check_mesh(const TriangleMesh& mesh);
 
 /// Decimates `mesh` (check_mesh first). Deterministic. Reentrant: the VTK objects it uses are

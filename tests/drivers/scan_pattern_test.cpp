@@ -56,8 +56,8 @@ TEST(ScanPattern, DualHeadSeesTheWallsOneHeadMisses) {
   settings.points_per_profile = 300;
   const NoiseSettings no_noise{.sigma_mm = 0.0};
   std::mt19937 rng(1);
-  const auto one_head = to_part(laser_profiles(surface, settings, no_noise, rng),
-                                settings.calibration);
+  const auto one_head =
+      to_part(laser_profiles(surface, settings, no_noise, rng), settings.calibration);
   EXPECT_LT(wall_points(one_head, 20.0) + wall_points(one_head, -20.0), 100u);
 
   settings.head_tilt_deg = 30.0;

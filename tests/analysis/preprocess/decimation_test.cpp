@@ -218,6 +218,14 @@ TEST(Decimation, BadMeshesAreRefusedByName) {
   mesh.triangles = {{0, 1, 2}};
   mesh.vertices[2].y() = std::numeric_limits<double>::quiet_NaN();
   expect_error(mesh, "vertex 2 is not finite");
+  mesh.vertices[2] = Vec3(0, 3e36, 0);  // a float STL's garbage corner
+  expect_error(mesh, "vertex 2 lies");
+  mesh.vertices[2] = Vec3(0, 1, 0);
+  mesh.triangles = {{0, 1, 2}, {1, 0, 2}};  // back to back
+  expect_error(mesh, "triangles 0 and 1 have the same three vertices");
+  mesh.vertices.emplace_back(1, 1, 0);
+  mesh.triangles = {{0, 1, 2}, {1, 2, 3}};  // wound against each other across edge 1-2
+  expect_error(mesh, "triangles 0 and 1 both run edge 1-2 the same way");
   expect_error(TriangleMesh{}, "no triangles");
 }
 
