@@ -160,3 +160,39 @@ TEST(SettingsProto, ShapeSettingsOverrideAndAreChecked) {
 
 }  // namespace
 }  // namespace springscan::analysis
+
+namespace springscan::analysis {
+namespace {
+
+TEST(SettingsProto, MeshDecimationOverridesRangesAndRoundTrip) {
+  auto defaults = from_proto(v1::ReductionSettings{});
+  ASSERT_TRUE(defaults);
+  EXPECT_FALSE(defaults->mesh_decimation.enabled);
+  EXPECT_EQ(defaults->mesh_decimation.max_error_mm, DecimationSettings{}.max_error_mm);
+  const auto m = parse(R"(reduction { mesh_decimation { enabled: true target_reduction: 0.7
+                          feature_angle_deg: 30 boundary_vertex_deletion: true
+                          max_error_mm: 0.02 } })");
+  auto s = from_proto(m.reduction());
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_TRUE(s->mesh_decimation.enabled);
+  EXPECT_EQ(s->mesh_decimation.target_reduction, 0.7);
+  EXPECT_EQ(s->mesh_decimation.feature_angle_deg, 30.0);
+  EXPECT_TRUE(s->mesh_decimation.boundary_vertex_deletion);
+  EXPECT_EQ(s->mesh_decimation.max_error_mm, 0.02);
+  v1::ReductionSettings back;
+  to_proto(*s, &back);
+  auto again = from_proto(back);
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->mesh_decimation.max_error_mm, 0.02);
+  EXPECT_TRUE(again->mesh_decimation.boundary_vertex_deletion);
+  const auto bad =
+      from_proto(parse("reduction { mesh_decimation { target_reduction: 1.5 } }").reduction());
+  ASSERT_FALSE(bad);
+  EXPECT_EQ(bad.code(), ErrorCode::kInvalidSettings);
+  EXPECT_NE(bad.message().find("reduction.mesh_decimation.target_reduction = 1.5"),
+            std::string::npos)
+      << bad.message();
+}
+
+}  // namespace
+}  // namespace springscan::analysis
