@@ -30,7 +30,8 @@ int bends_of(const PartSegmentation& seg, int flange_id) {
 
 // Flange f's shape in the frame of its bend line, and an end flange's free edge.
 void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
-                         const BendShapeSettings& st, std::size_t f, SpringbackResult& result) {
+                         const std::vector<std::uint32_t>& points, const BendShapeSettings& st,
+                         std::size_t f, SpringbackResult& result) {
   const PartSegmentation& seg = model.segmentation;
   const Flange& flange = seg.flanges[f];
   FlangeFit& fit = result.flanges[f];
@@ -47,7 +48,7 @@ void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
     fit.shape.twist_measured = false;
   }
   if (bend && bends_of(seg, flange.id) == 1)
-    fit.edge = measure_free_edge(model, flange, fit.shape, bend->axis_point, st.edge);
+    fit.edge = measure_free_edge(model, flange, fit.shape, bend->axis_point, scan, points, st.edge);
 }
 
 // The flange's end normal next to the bend on the bend's concave side (the side its nominal
@@ -260,13 +261,14 @@ BendZones label_bend_zones(const PartModel& model, std::vector<std::int32_t>& la
   return out;
 }
 
-void measure_shapes(const PartModel& model, const PointCloud& scan, const BendZones& zones,
+void measure_shapes(const PartModel& model, const PointCloud& scan,
+                    const std::vector<std::uint32_t>& points, const BendZones& zones,
                     const std::vector<std::vector<std::uint32_t>>& zone_points,
                     const BendShapeSettings& st, int threads, SpringbackResult& result) {
   const auto& seg = model.segmentation;
   // Flanges, then bends, one task each: each writes only its own record.
   for_each_block(seg.flanges.size(), 1, threads, [&](std::size_t, std::size_t f, std::size_t) {
-    fit_flange_shape_of(model, scan, st, f, result);
+    fit_flange_shape_of(model, scan, points, st, f, result);
   });
   for_each_block(seg.bends.size(), 1, threads, [&](std::size_t, std::size_t b, std::size_t) {
     measure_bend_shape(model, scan, zones, zone_points, st, b, result);

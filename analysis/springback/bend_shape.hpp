@@ -27,10 +27,13 @@ BendZones label_bend_zones(const PartModel& model, std::vector<std::int32_t>& la
 
 /// Flange shapes, bend zone cylinders, the angle along each bend and, next to a curled
 /// flange, the bend angle from the end tangent planes; into `result` (flanges and bends filled
-/// by the local fits). `zone_points[z]`: the scan points assigned to zone z. Flanges, then
+/// by the local fits). `points`: the scan points in use (thinned; a free edge looks for
+/// its points among all of them, the assignment leaves out those next to a flange's outline);
+/// `zone_points[z]`: those assigned to zone z. Flanges, then
 /// bends, run as parallel tasks on up to `threads` (0: all cores); the result does not depend
 /// on it.
-void measure_shapes(const PartModel& model, const PointCloud& scan, const BendZones& zones,
+void measure_shapes(const PartModel& model, const PointCloud& scan,
+                    const std::vector<std::uint32_t>& points, const BendZones& zones,
                     const std::vector<std::vector<std::uint32_t>>& zone_points,
                     const BendShapeSettings& settings, int threads, SpringbackResult& result);
 

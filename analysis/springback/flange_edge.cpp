@@ -92,6 +92,7 @@ Eigen::Vector2d upper_hull_line(std::vector<Eigen::Vector2d> p) {
 
 EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
                                 const FlangeShape& shape, const Vec3& bend_axis_point,
+                                const PointCloud& scan, std::span<const std::uint32_t> points,
                                 const FlangeEdgeSettings& st) {
   EdgeDeviation result;
   if (!shape.measured || !model.distance || !model.samples.has_face_ids()) return result;
@@ -136,15 +137,19 @@ EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
       return result;
   // The scan points within the band inside the CAD edge, as (t, s towards the edge).
   std::vector<Eigen::Vector2d> band;
-  for (std::size_t j = 0; j < shape.local.size(); ++j) {
-    if (!shape.inlier[j]) continue;
-    const Vec3& q = shape.local[j];
+  const auto add = [&](const Vec3& q) {
     const double k = strip_of(q.y());
-    if (!(k >= 0.0 && k < static_cast<double>(n))) continue;
+    if (!(k >= 0.0 && k < static_cast<double>(n))) return;
     Strip& strip = strips[static_cast<std::size_t>(k)];
-    if (out * q.x() < strip.cad_s - st.band_mm) continue;
-    band.emplace_back(q.y(), out * q.x());
+    const double s = out * q.x();
+    if (s < strip.cad_s - st.band_mm || s > strip.cad_s + st.band_mm) return;
+    band.emplace_back(q.y(), s);
     ++strip.count;
+  };
+  for (std::uint32_t i : points) {
+    const Vec3 q = frame.local(scan.points[i]);
+    if (std::abs(q.z() - surface_h(shape.surface, q.x(), q.y())) <= shape.inlier_threshold_mm)
+      add(q);
   }
   if (band.size() < 2) return result;
   // The line of the hull lies below the edge by about one point's share of the band's area

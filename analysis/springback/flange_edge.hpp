@@ -14,6 +14,9 @@
 //
 // Thread safety: pure function (SurfaceDistance::closest is thread-safe).
 
+#include <cstdint>
+#include <span>
+
 #include "analysis/core/part_model.hpp"
 #include "analysis/springback/flange_shape.hpp"
 
@@ -39,10 +42,15 @@ struct EdgeDeviation {
 };
 
 /// The free edge of `flange` (the side away from `bend_axis_point`, its only bend's axis), from
-/// its fitted `shape` (frame coordinates of its scan points and inliers). Unmeasured when the
+/// its fitted `shape` and the scan `points` in use: those within band_mm of the CAD edge (inside
+/// or beyond it), within the flange's extent along it and on its fitted surface (within its
+/// inlier threshold). Not the flange's assigned points: the assignment leaves out those next to
+/// its outline (the bend margin around a solid's end face, and points nearer an end-face sample
+/// than a flange sample), and a solid's edge then read 0.05-1.5 mm short. Unmeasured when the
 /// model has no exact distance or the shape was not measured.
 EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
                                 const FlangeShape& shape, const Vec3& bend_axis_point,
+                                const PointCloud& scan, std::span<const std::uint32_t> points,
                                 const FlangeEdgeSettings& settings = {});
 
 }  // namespace springscan::analysis

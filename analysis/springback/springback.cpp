@@ -270,7 +270,7 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
   const std::vector<std::vector<std::uint32_t>> zone_points(
       std::make_move_iterator(assigned.begin() + static_cast<std::ptrdiff_t>(seg.flanges.size())),
       std::make_move_iterator(assigned.end()));
-  measure_shapes(model, scan, zones, zone_points, st.shape, st.threads, result);
+  measure_shapes(model, scan, order, zones, zone_points, st.shape, st.threads, result);
   return result;
 }
 

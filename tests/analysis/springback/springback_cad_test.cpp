@@ -2,10 +2,14 @@
 // shape, sampled (sample_cad) and segmented (segment_cad) like an imported IGES/STEP part.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
+#include "analysis/cad/model.hpp"
 #include "analysis/cad/sampling.hpp"
 #include "analysis/cad/segmentation.hpp"
 #include "analysis/springback/springback.hpp"
 #include "simulators/parts/cad_profile.hpp"
+#include "simulators/parts/shaped_profile.hpp"
 #include "simulators/parts/sheet_part.hpp"
 
 namespace springscan::analysis {
@@ -52,6 +56,40 @@ TEST(SpringbackCad, SolidSheetWithBothSidesOfAHatProfile) {
   ProfileSpec spec = hat_profile(25, 30, 40, 85, 4);
   spec.thickness_mm = 1.5;
   expect_springback_on_cad(spec, {1.0, 2.0, 0.5, 1.5});
+}
+
+// The free edges of a solid hat loaded like a CAD file (exact distance): its end faces are
+// other faces, whose 2 mm margin must not cut the flanges' edges short. The last brim 0.3 mm
+// longer, the first as drawn; the scan in the CAD frame.
+TEST(SpringbackCad, FreeEdgesOfASolidSheet) {
+  ProfileSpec spec = hat_profile(25, 30, 40, 85, 4);
+  spec.thickness_mm = 1.5;
+  spec.width_mm = 80;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "springscan_edge_hat.brep").string();
+  ASSERT_TRUE(write_profile_cad(spec, path));
+  const auto model = load_part_model(path);
+  ASSERT_TRUE(model.ok()) << model.message();
+  ProfileShape shape;
+  shape.length_change_mm = {0, 0, 0, 0, 0.3};
+  const auto scan = simulate_shaped_scan(spec, shape, {.point_count = 60000});
+  ASSERT_TRUE(scan.ok());
+  const auto result = measure_springback(*model, *scan);
+  ASSERT_TRUE(result.ok()) << result.message();
+  int edges = 0;
+  for (const FlangeFit& f : result->flanges) {
+    if (!f.edge.measured) continue;
+    ++edges;
+    // Flange ids follow segment_cad; the moved brim is the one whose edge came out.
+    const double truth = f.edge.in_plane_mean_mm > 0.15 ? 0.3 : 0.0;
+    EXPECT_NEAR(f.edge.in_plane_min_mm, truth, 0.05) << "flange " << f.flange_id;
+    EXPECT_NEAR(f.edge.in_plane_max_mm, truth, 0.05) << "flange " << f.flange_id;
+    EXPECT_NEAR(f.edge.across_mean_mm, 0.0, 0.05) << "flange " << f.flange_id;
+  }
+  EXPECT_EQ(edges, 2);
+  double total = 0.0;
+  for (const FlangeFit& f : result->flanges) total += f.edge.measured ? f.edge.in_plane_mean_mm : 0;
+  EXPECT_NEAR(total, 0.3, 0.05) << "one edge moved by 0.3 mm, the other not";
 }
 
 }  // namespace
