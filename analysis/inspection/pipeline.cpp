@@ -1,6 +1,7 @@
 // The inspection pipeline (DESIGN.md "Analysis pipeline"): one commented line per stage.
 #include "analysis/inspection/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -18,6 +19,7 @@
 #include "analysis/messages/settings_proto.hpp"
 #include "analysis/messages/springback_proto.hpp"
 #include "analysis/messages/verdict_proto.hpp"
+#include "analysis/preprocess/normals.hpp"
 #include "analysis/preprocess/reduction.hpp"
 #include "analysis/registration/global_fit.hpp"
 
@@ -225,6 +227,23 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
   return FieldCoverage{field.coverage, field.model_points, to_string(field.method)};
 }
 
+// A solid model (its flanges have two skins) seen by a one-sided scan: the global fit pairs by
+// the facing rule (registration/facing.hpp) and needs the fit points' normals toward the
+// scanner. A scan that brings normals keeps them (voxel-averaged); otherwise they are estimated
+// on the fit points and turned toward the scanner's viewpoint (settings.normals). A surface
+// model (no thickness) has no far skin: no normals, nearest pairs.
+Expected<std::vector<Vec3>> fit_point_normals(const PartModel& model, const PointCloud& fit_points,
+                                              const NormalSettings& settings) {
+  const bool solid =
+      std::any_of(model.segmentation.flanges.begin(), model.segmentation.flanges.end(),
+                  [](const Flange& f) { return f.thickness_mm > 0.0; });
+  if (!solid) return std::vector<Vec3>{};
+  if (fit_points.normals.size() == fit_points.size()) return fit_points.normals;
+  auto estimated = estimate_normals(fit_points.points, settings);
+  if (!estimated) return estimated.error().prepend("global fit: scan normals: ");
+  return std::move(estimated->normals);
+}
+
 // The report's head: schema, the settings in force, what went in.
 void start_report(const PipelineSettings& config, const v1::AnalysisSettings& settings,
                   const PartModel& model, const PointCloud& scan, v1::InspectionReport& report) {
@@ -263,8 +282,10 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   t = Clock::now();
   // 4. Global fit: PCA with every proper axis candidate, then ICP (paper §3).
   const KdTree model_tree(model.samples.points);
+  auto fit_normals = fit_point_normals(model, reduced->scan_for_fit, config->normals);
+  if (!fit_normals) return fit_normals.error();
   auto fit = global_fit(reduced->scan_for_fit.points, model_tree, model.samples.normals,
-                        config->global_fit);
+                        config->global_fit, *fit_normals);
   if (!fit) return fit.error();
   // The part's ends fix what the surface leaves free (registration/boundary.hpp).
   auto pinned =

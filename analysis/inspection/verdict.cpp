@@ -45,13 +45,16 @@ void check_bends(const VerdictInput& in, const VerdictSettings& s, VerdictResult
     const auto own = s.angle_tolerance_deg_by_bend.find(bend.bend_id);
     const double tolerance =
         own != s.angle_tolerance_deg_by_bend.end() ? own->second : s.angle_tolerance_deg;
-    // The one place a bend passes: the report and the PLC's bend flags copy this.
-    const bool pass = bend.measured && std::abs(bend.springback_deg) <= tolerance;
+    // The one place a bend passes: the report and the PLC's bend flags copy this. A closed hem
+    // (not measurable) is not judged and raises no failure flag.
+    const bool pass =
+        bend.measurable ? bend.measured && std::abs(bend.springback_deg) <= tolerance : true;
     out.bends.push_back({bend.bend_id, tolerance, pass});
     const std::string name = "bend " + std::to_string(bend.bend_id);
     if (!bend.measured) {
-      if (s.fail_unmeasured_bends) {
-        out.reasons.push_back(name + " not measured (a flange had too few scan points)");
+      // A closed hem is listed as not measurable; it never fails the part by itself.
+      if (s.fail_unmeasured_bends && bend.measurable) {
+        out.reasons.push_back(bend.status.empty() ? name + " not measured" : bend.status);
       }
       continue;
     }

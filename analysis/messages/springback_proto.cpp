@@ -92,6 +92,8 @@ void fill_springback_report(const SpringbackResult& result, v1::InspectionReport
     for (int face : m.face_ids) b.add_cad_faces(face);
     b.set_measured(m.measured);  // pass and angle_tolerance_deg: the verdict (verdict_proto.hpp)
     bend_shape_to_proto(m, b);
+    b.set_measurable(m.measurable);
+    b.set_status(m.status);
     if (!m.measured) continue;  // angles stay unset (0) when nothing was measured
     b.set_measured_angle_deg(m.measured_angle_deg);
     b.set_springback_deg(m.springback_deg);

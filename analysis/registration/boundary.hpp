@@ -33,7 +33,7 @@ namespace springscan::analysis {
 
 struct BoundarySettings {
   bool pin_free_directions = true;      ///< false: free directions are reported, not pinned
-  double free_eigenvalue_ratio = 1e-3;  ///< translation information below this x the largest
+  double free_eigenvalue_ratio = 2e-2;  ///< translation information below this x the largest
   double end_band_mm = 1.0;             ///< width of the band that locates each end
   double surface_distance_mm = 0.3;     ///< scan points this close to the surface are used
   double cover_tolerance_mm = 1.0;      ///< lengths this close: the scan spans both ends

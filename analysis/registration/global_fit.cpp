@@ -8,6 +8,7 @@
 #include "analysis/core/parallel.hpp"
 #include "analysis/preprocess/reduction.hpp"
 #include "analysis/preprocess/voxel.hpp"
+#include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -26,7 +27,11 @@ struct CoarseModel {
   std::vector<Vec3> normals;
 };
 
-CoarseModel coarse_model(const KdTree& tree, const std::vector<Vec3>& normals, double divisions) {
+// The coarse model: one point per voxel, so many as the voxel reduction keeps. Its points are
+// voxel centroids with averaged normals, except under the facing rule: a voxel of a solid holds
+// both skins, whose normals cancel, so the samples themselves are kept there (evenly strided).
+CoarseModel coarse_model(const KdTree& tree, const std::vector<Vec3>& normals, double divisions,
+                         bool facing) {
   CoarseModel out;
   if (!(divisions > 0.0) || normals.size() != tree.size()) return out;
   PointCloud cloud{tree.points(), normals, {}, {}, {}};
@@ -38,6 +43,11 @@ CoarseModel coarse_model(const KdTree& tree, const std::vector<Vec3>& normals, d
       static_cast<double>(reduced->cloud.size()) >
           kMaxCoarseModelShare * static_cast<double>(tree.size()))
     return out;
+  if (facing) {
+    out.normals = strided_sample(normals, reduced->cloud.size());
+    out.tree = std::make_unique<KdTree>(strided_sample(tree.points(), reduced->cloud.size()));
+    return out;
+  }
   out.normals = std::move(reduced->cloud.normals);
   out.tree = std::make_unique<KdTree>(std::move(reduced->cloud.points));
   return out;
@@ -88,11 +98,17 @@ double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
 
 Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree& model_tree,
                                      const std::vector<Vec3>& model_normals,
-                                     const GlobalFitSettings& settings) {
+                                     const GlobalFitSettings& settings,
+                                     const std::vector<Vec3>& scan_normals) {
   if (auto error = check_settings(settings)) return *error;
   if (scan.empty()) return fail("global fit: the scan is empty");
   if (model_tree.empty()) return fail("global fit: the model is empty");
   if (!all_finite(scan)) return fail("global fit: the scan has non-finite (NaN/inf) coordinates");
+  const bool facing = !scan_normals.empty();
+  if (facing && (scan_normals.size() != scan.size() || model_normals.size() != model_tree.size()))
+    return fail("global fit: the facing rule needs one normal per scan and per model point (" +
+                std::to_string(scan_normals.size()) + " for " + std::to_string(scan.size()) +
+                " scan points)");
   GlobalFitResult result;
   const int threads = settings.icp.threads;
   const double trim = settings.icp.trimmed_fraction;
@@ -106,16 +122,18 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
     // The candidate search only has to tell poses apart: a coarse model makes its many short
     // ICP runs several times cheaper; the final ICP below uses the full model.
     const CoarseModel coarse =
-        coarse_model(model_tree, model_normals, settings.pca_model_divisions);
-    auto pca = coarse.tree ? pca_align(scan, *coarse.tree, coarse.normals, pca_settings)
-                           : pca_align(scan, model_tree, model_normals, pca_settings);
+        coarse_model(model_tree, model_normals, settings.pca_model_divisions, facing);
+    auto pca = coarse.tree
+                   ? pca_align(scan, *coarse.tree, coarse.normals, pca_settings, scan_normals)
+                   : pca_align(scan, model_tree, model_normals, pca_settings, scan_normals);
     if (!pca) return pca.error().prepend("global fit: ");
     result.pca = std::move(*pca);
     result.rms_after_pca_mm =
         rms_nearest_distance(diagnostic, result.pca.T_pca, model_tree, trim, threads);
     // Every distinct finalist refined and scored on the same points against the full model.
-    auto choice = choose_orientation(scan, model_tree, model_normals, result.pca.finalist_poses,
-                                     orientation_settings(settings), settings.icp, threads);
+    auto choice =
+        choose_orientation(scan, model_tree, model_normals, result.pca.finalist_poses,
+                           orientation_settings(settings), settings.icp, threads, scan_normals);
     if (!choice) return choice.error().prepend("global fit: ");
     result.orientation = std::move(*choice);
     start = result.orientation.candidates[result.orientation.best].T_cad_scan;
@@ -130,7 +148,11 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
   } else {
     result.rms_after_pca_mm = result.rms_initial_mm;
   }
-  auto fit = icp(scan, model_tree, model_normals, start, settings.icp);
+  auto fit = facing ? icp(scan,
+                          nearest_facing_pairs(model_tree, model_normals, scan_normals,
+                                               settings.icp.max_correspondence_distance_mm),
+                          start, settings.icp)
+                    : icp(scan, model_tree, model_normals, start, settings.icp);
   if (!fit) return fit.error().prepend("global fit: ");
   result.icp = std::move(*fit);
   result.T_cad_scan = result.icp.T_target_source;

@@ -46,10 +46,15 @@ struct GlobalFitResult {
 };
 
 /// Fits `scan` to the model given by `model_tree` (+ unit normals for point-to-plane).
-/// Errors: empty, non-finite or degenerate (collinear) clouds, invalid settings.
+/// `scan_normals` (one per scan point, facing the scanner; zero where unknown) turn on the
+/// facing rule for a solid model seen from one side (analysis/registration/facing.hpp): every
+/// pair and score then takes model samples facing the point's way only. Empty: nearest samples.
+/// Errors: empty, non-finite or degenerate (collinear) clouds, invalid settings, normals of the
+/// wrong count.
 Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree& model_tree,
                                      const std::vector<Vec3>& model_normals,
-                                     const GlobalFitSettings& settings = {});
+                                     const GlobalFitSettings& settings = {},
+                                     const std::vector<Vec3>& scan_normals = {});
 
 /// Root mean square nearest distance of T * points to the tree, mm, over the closest
 /// (1 - trimmed_fraction) of the points (parallel, deterministic).

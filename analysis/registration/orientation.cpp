@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -45,17 +46,23 @@ namespace {
 
 // The model sample that explains q best among its nearest ones: least tangent-plane distance
 // plus distance beyond `spacing_mm`. Near an edge the nearest sample may lie on the neighbouring
-// face (or on the sheet's other side), whose plane is not the point's. Returns that error, mm^2,
-// capped at cap2 (then `best` is the nearest sample).
+// face (or on the sheet's other side), whose plane is not the point's. With the point's normal
+// `facing` (non-zero: a one-sided scan of a solid), only samples facing the same way count
+// (analysis/registration/facing.hpp). Returns that error, mm^2, capped at cap2 (then `best` is
+// the nearest sample).
 double best_sample(const KdTree& tree, const std::vector<Vec3>& normals, double spacing_mm,
-                   double cap2, const Vec3& q, std::uint32_t& best) {
-  std::array<std::uint32_t, kScoreNeighbors> index{};
-  std::array<double, kScoreNeighbors> d2{};
-  const std::size_t found = tree.knn(q, kScoreNeighbors, index.data(), d2.data());
+                   double cap2, const Vec3& q, const Vec3& facing, std::uint32_t& best) {
+  std::array<std::uint32_t, kFacingNeighbors> index{};
+  std::array<double, kFacingNeighbors> d2{};
+  const bool rule = !facing.isZero();
+  const std::size_t found =
+      tree.knn(q, rule ? kFacingNeighbors : kScoreNeighbors, index.data(), d2.data());
   const bool planes = normals.size() == tree.size();
   double e2 = cap2;
   best = index[0];
-  for (std::size_t k = 0; k < found; ++k) {
+  for (std::size_t k = 0, considered = 0; k < found && considered < kScoreNeighbors; ++k) {
+    if (rule && !(normals[index[k]].dot(facing) > 0.0)) continue;
+    ++considered;
     const Vec3 d = q - tree.points()[index[k]];
     const double beyond = std::max(0.0, std::sqrt(d2[k]) - spacing_mm);
     const double across = planes ? normals[index[k]].dot(d) : std::sqrt(d2[k]);
@@ -65,18 +72,23 @@ double best_sample(const KdTree& tree, const std::vector<Vec3>& normals, double 
   return e2;
 }
 
-// ICP pairs by the same rule as the score.
+// The normal of source point i turned by T, or zero without normals (no facing rule).
+Vec3 turned_normal(const std::vector<Vec3>& source_normals, std::size_t i, const Transform& T) {
+  return source_normals.empty() ? Vec3::Zero() : Vec3(T.linear() * source_normals[i]);
+}
+
+// ICP pairs by the same rule as the score. `source_normals`: one per source point, or empty.
 IcpPairSearch best_sample_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
-                                double spacing_mm) {
+                                const std::vector<Vec3>& source_normals, double spacing_mm) {
   const bool planes = normals.size() == tree.size();
-  return [&tree, &normals, spacing_mm, planes](const std::vector<Vec3>& source, const Transform& T,
-                                               std::size_t begin, std::size_t end,
-                                               std::vector<IcpPair>& pairs) {
+  return [&tree, &normals, &source_normals, spacing_mm, planes](
+             const std::vector<Vec3>& source, const Transform& T, std::size_t begin,
+             std::size_t end, std::vector<IcpPair>& pairs) {
     const double inf = std::numeric_limits<double>::infinity();
     for (std::size_t i = begin; i < end; ++i) {
       const Vec3 q = T * source[i];
       std::uint32_t best = 0;
-      best_sample(tree, normals, spacing_mm, inf, q, best);
+      best_sample(tree, normals, spacing_mm, inf, q, turned_normal(source_normals, i, T), best);
       IcpPair& p = pairs[i];
       p.valid = true;
       p.point = tree.points()[best];
@@ -86,34 +98,55 @@ IcpPairSearch best_sample_pairs(const KdTree& tree, const std::vector<Vec3>& nor
   };
 }
 
+// Points and their normals (empty: no facing rule), sampled alike.
+struct ScoredPoints {
+  std::vector<Vec3> points;
+  std::vector<Vec3> normals;
+};
+
+ScoredPoints strided_points(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                            std::size_t count) {
+  ScoredPoints out{strided_sample(points, count), {}};
+  if (normals.size() == points.size()) out.normals = strided_sample(normals, count);
+  return out;
+}
+
+double surface_score(const ScoredPoints& sample, const Transform& T, const KdTree& model_tree,
+                     const std::vector<Vec3>& model_normals, double spacing_mm, double cap_mm) {
+  if (sample.points.empty() || model_tree.empty()) return 0.0;
+  const double cap2 = cap_mm * cap_mm;
+  double sum = 0.0;  // serial: a few thousand points, in a fixed order
+  std::uint32_t best = 0;
+  for (std::size_t i = 0; i < sample.points.size(); ++i)
+    sum += best_sample(model_tree, model_normals, spacing_mm, cap2, T * sample.points[i],
+                       turned_normal(sample.normals, i, T), best);
+  return sum / static_cast<double>(sample.points.size());
+}
+
 }  // namespace
 
 double robust_surface_score(const std::vector<Vec3>& points, const Transform& T,
                             const KdTree& model_tree, const std::vector<Vec3>& model_normals,
                             double spacing_mm, double cap_mm) {
-  if (points.empty() || model_tree.empty()) return 0.0;
-  const double cap2 = cap_mm * cap_mm;
-  double sum = 0.0;  // serial: a few thousand points, in a fixed order
-  std::uint32_t best = 0;
-  for (const Vec3& p : points)
-    sum += best_sample(model_tree, model_normals, spacing_mm, cap2, T * p, best);
-  return sum / static_cast<double>(points.size());
+  return surface_score({points, {}}, T, model_tree, model_normals, spacing_mm, cap_mm);
 }
 
 // Some 65 lines: refine every finalist, score it, then rank and test the runner-up for equivalence;
 // the three steps share the same points and scores, kept together so the comparison reads as fair.
-Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
-                                               const KdTree& model_tree,
-                                               const std::vector<Vec3>& model_normals,
-                                               const std::vector<Transform>& starts,
-                                               const OrientationSettings& settings,
-                                               const IcpSettings& icp_settings, int threads) {
+Expected<OrientationChoice> choose_orientation(
+    const std::vector<Vec3>& scan, const KdTree& model_tree, const std::vector<Vec3>& model_normals,
+    const std::vector<Transform>& starts, const OrientationSettings& settings,
+    const IcpSettings& icp_settings, int threads, const std::vector<Vec3>& scan_normals) {
   if (starts.empty()) return fail("orientation: no candidate pose");
   if (scan.empty() || model_tree.empty()) return fail("orientation: empty scan or model");
-  const std::vector<Vec3> refine_sample = strided_sample(scan, settings.refine_points);
-  const std::vector<Vec3> score_sample = strided_sample(scan, settings.score_points);
+  const bool facing = !scan_normals.empty();
+  if (facing && (scan_normals.size() != scan.size() || model_normals.size() != model_tree.size()))
+    return fail("orientation: the facing rule needs one normal per scan and per model point");
+  const ScoredPoints refine_sample = strided_points(scan, scan_normals, settings.refine_points);
+  const ScoredPoints score_sample = strided_points(scan, scan_normals, settings.score_points);
   const double spacing = settings.spacing_allowance * model_sample_spacing(model_tree);
-  const IcpPairSearch pairs = best_sample_pairs(model_tree, model_normals, spacing);
+  const IcpPairSearch pairs =
+      best_sample_pairs(model_tree, model_normals, refine_sample.normals, spacing);
   IcpSettings s = icp_settings;
   s.max_iterations = settings.refine_iterations;
   s.threads = 1;  // parallel over the candidates instead
@@ -122,17 +155,21 @@ Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
   parallel_tasks(starts.size(), threads, [&](std::size_t i) {
     OrientationCandidate& c = choice.candidates[i];
     c.T_cad_scan = starts[i];
-    auto fit = icp(refine_sample, pairs, starts[i], s);
+    auto fit = icp(refine_sample.points, pairs, starts[i], s);
     if (fit) c.T_cad_scan = fit->T_target_source;
-    c.score_mm2 = robust_surface_score(score_sample, c.T_cad_scan, model_tree, model_normals,
-                                       spacing, settings.score_cap_mm);
+    c.score_mm2 = surface_score(score_sample, c.T_cad_scan, model_tree, model_normals, spacing,
+                                settings.score_cap_mm);
   });
   const auto& cs = choice.candidates;
   for (std::size_t i = 1; i < cs.size(); ++i)
     if (cs[i].score_mm2 < cs[choice.best].score_mm2) choice.best = i;
   const OrientationCandidate& best = cs[choice.best];
   // The next distinct orientation that is not the same answer on a symmetric model.
-  const std::vector<Vec3> model_sample = strided_sample(model_tree.points(), kEquivalenceSamples);
+  // A symmetry maps outward normals onto outward normals: the model's own follow the same rule.
+  const ScoredPoints model_sample = strided_points(
+      model_tree.points(), facing ? model_normals : std::vector<Vec3>{}, kEquivalenceSamples);
+  const IcpPairSearch self_pairs =
+      best_sample_pairs(model_tree, model_normals, model_sample.normals, spacing);
   // To convergence: an exact symmetry leaves no error. A symmetry of the model maps its centroid
   // onto itself, which also fixes the directions the surface leaves free (a profile's length).
   IcpSettings self_settings = s;
@@ -153,10 +190,10 @@ Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
     if (within_noise) {
       Transform T_cad_cad = cs[i].T_cad_scan * best.T_cad_scan.inverse();
       T_cad_cad.translation() += centroid - T_cad_cad * centroid;
-      auto self_fit = icp(model_sample, pairs, T_cad_cad, self_settings);
+      auto self_fit = icp(model_sample.points, self_pairs, T_cad_cad, self_settings);
       if (self_fit) T_cad_cad = self_fit->T_target_source;
-      const double self = robust_surface_score(model_sample, T_cad_cad, model_tree, model_normals,
-                                               spacing, settings.score_cap_mm);
+      const double self = surface_score(model_sample, T_cad_cad, model_tree, model_normals, spacing,
+                                        settings.score_cap_mm);
       if (std::sqrt(self) <= settings.equivalent_rms_mm) {
         choice.symmetric_model = true;
         continue;

@@ -53,13 +53,13 @@ struct OrientationChoice {
 
 /// Refines every start (at least one) on the same scan sample against `model_tree`, scores all on
 /// the same scan sample and picks the best. `icp_settings` is the refinement's engine setup
-/// (max_iterations is replaced by refine_iterations). Errors: no start, empty clouds.
-Expected<OrientationChoice> choose_orientation(const std::vector<Vec3>& scan,
-                                               const KdTree& model_tree,
-                                               const std::vector<Vec3>& model_normals,
-                                               const std::vector<Transform>& starts,
-                                               const OrientationSettings& settings,
-                                               const IcpSettings& icp_settings, int threads = 0);
+/// (max_iterations is replaced by refine_iterations). With `scan_normals` (one per scan point: a
+/// one-sided scan of a solid) pairs and scores follow the facing rule
+/// (analysis/registration/facing.hpp). Errors: no start, empty clouds, normals of the wrong count.
+Expected<OrientationChoice> choose_orientation(
+    const std::vector<Vec3>& scan, const KdTree& model_tree, const std::vector<Vec3>& model_normals,
+    const std::vector<Transform>& starts, const OrientationSettings& settings,
+    const IcpSettings& icp_settings, int threads = 0, const std::vector<Vec3>& scan_normals = {});
 
 /// The mean squared capped robust error of T * points against the model (tangent-plane distance
 /// to a sample, plus the distance beyond `spacing_mm` from it, the least over the 4 nearest

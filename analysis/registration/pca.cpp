@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -25,12 +26,31 @@ constexpr double kKeepsNormalCos = 0.5;
 // about itself no PCA can fix.
 constexpr double kCollinearEigenvalueRatio = 1e-10;
 
-// The robust error of a candidate: mean squared nearest distance, the worst share left out.
-double trimmed_score(const std::vector<Vec3>& sample, const Transform& T, const KdTree& target,
-                     double trimmed_fraction) {
-  std::vector<double> d2(sample.size());
-  for (std::size_t i = 0; i < sample.size(); ++i)
-    d2[i] = target.nearest(T * sample[i])->squared_distance;
+// A sample of the source with its normals (empty: no facing rule), picked alike.
+struct SourceSample {
+  std::vector<Vec3> points;
+  std::vector<Vec3> normals;
+};
+
+SourceSample source_sample(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                           std::size_t count) {
+  SourceSample out{strided_sample(points, count), {}};
+  if (has_facing_normals(points, normals)) out.normals = strided_sample(normals, count);
+  return out;
+}
+
+// The robust error of a candidate: mean squared nearest distance (to a sample facing the same
+// way, on a solid), the worst share left out.
+double trimmed_score(const SourceSample& sample, const Transform& T, const KdTree& target,
+                     const std::vector<Vec3>& target_normals, double trimmed_fraction) {
+  const bool facing = !sample.normals.empty();
+  std::vector<double> d2(sample.points.size());
+  for (std::size_t i = 0; i < d2.size(); ++i) {
+    const Vec3 q = T * sample.points[i];
+    d2[i] = facing
+                ? facing_squared_distance(target, target_normals, q, T.linear() * sample.normals[i])
+                : target.nearest(q)->squared_distance;
+  }
   std::sort(d2.begin(), d2.end());
   const auto keep = std::max<std::size_t>(
       1, d2.size() - static_cast<std::size_t>(trimmed_fraction * static_cast<double>(d2.size())));
@@ -50,15 +70,18 @@ struct Refiner {
   const PcaAlignSettings& settings;
   IcpSettings icp_settings;
 
-  void run(const std::vector<Vec3>& sample, const std::vector<std::size_t>& which, int iterations,
+  void run(const SourceSample& sample, const std::vector<std::size_t>& which, int iterations,
            std::vector<Transform>& poses, std::vector<double>& scores) {
     IcpSettings s = icp_settings;
     s.max_iterations = iterations;
     parallel_tasks(which.size(), settings.threads, [&](std::size_t k) {
       const std::size_t i = which[k];
-      auto fit = icp(sample, target, normals, poses[i], s);
+      auto fit = sample.normals.empty()
+                     ? icp(sample.points, target, normals, poses[i], s)
+                     : icp(sample.points,
+                           nearest_facing_pairs(target, normals, sample.normals, 0.0), poses[i], s);
       if (fit) poses[i] = fit->T_target_source;
-      scores[i] = trimmed_score(sample, poses[i], target, settings.score_trimmed_fraction);
+      scores[i] = trimmed_score(sample, poses[i], target, normals, settings.score_trimmed_fraction);
     });
   }
 };
@@ -197,15 +220,21 @@ std::vector<Mat3> pca_rotation_candidates(const PrincipalFrame& source,
 
 Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree& target,
                                    const std::vector<Vec3>& target_normals,
-                                   const PcaAlignSettings& settings) {
+                                   const PcaAlignSettings& settings,
+                                   const std::vector<Vec3>& source_normals) {
+  if (!source_normals.empty() &&
+      (source_normals.size() != source.size() || target_normals.size() != target.size()))
+    return fail(ErrorCode::kInvalidInput,
+                "pca: the facing rule needs one normal per source and per target point");
   auto source_frame = principal_frame(source);
   if (!source_frame) return source_frame.error().prepend("scan ");
   auto target_frame = principal_frame(target.points());
   if (!target_frame) return target_frame.error().prepend("model ");
   const auto rotations =
       pca_rotation_candidates(*source_frame, *target_frame, settings.in_plane_steps);
-  const std::vector<Vec3> sample = strided_sample(source, settings.sample_points);
-  const std::vector<Vec3> screen_sample = strided_sample(source, settings.screen_sample_points);
+  const SourceSample sample = source_sample(source, source_normals, settings.sample_points);
+  const SourceSample screen_sample =
+      source_sample(source, source_normals, settings.screen_sample_points);
   Refiner refiner{target, target_normals, settings, {}};
   refiner.icp_settings.method =
       target_normals.size() == target.size() ? IcpMethod::kPointToPlane : IcpMethod::kPointToPoint;
@@ -216,8 +245,8 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   const auto target_box = extent_along(target.points(), target_frame->axes);
   std::vector<Transform> starts;
   for (const Mat3& R : rotations)
-    for (const Vec3& t : translation_hypotheses(sample, R, *source_frame, *target_frame, target_box,
-                                                settings.partial_slack_fraction)) {
+    for (const Vec3& t : translation_hypotheses(sample.points, R, *source_frame, *target_frame,
+                                                target_box, settings.partial_slack_fraction)) {
       Transform start = Transform::Identity();
       start.linear() = R;
       start.translation() = t;

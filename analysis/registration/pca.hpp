@@ -74,9 +74,13 @@ std::vector<Mat3> pca_rotation_candidates(const PrincipalFrame& source,
                                           const PrincipalFrame& target, int in_plane_steps = 1);
 
 /// Aligns `source` to `target`. Point-to-plane refinement when `target_normals` has one normal
-/// per target point, point-to-point otherwise. Errors: as principal_frame, for either cloud.
+/// per target point, point-to-point otherwise. With `source_normals` (one per source point; a
+/// one-sided scan of a solid) every pair and score follows the facing rule
+/// (analysis/registration/facing.hpp). Errors: as principal_frame, for either cloud; normals
+/// of the wrong count.
 Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree& target,
                                    const std::vector<Vec3>& target_normals,
-                                   const PcaAlignSettings& settings = {});
+                                   const PcaAlignSettings& settings = {},
+                                   const std::vector<Vec3>& source_normals = {});
 
 }  // namespace springscan::analysis

@@ -1,11 +1,13 @@
 #include "analysis/springback/local_fit.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -28,6 +30,33 @@ IcpPairSearch exact_surface_pairs(const PartModel& model, double max_distance_mm
       pairs[i] = {hit.foot, hit.normal, d2, std::sqrt(d2) <= limit};
     }
   };
+}
+
+// On a solid sheet both skins of a flange lie within a sheet thickness of its scan points, and
+// a nearest-sample pair may cross the sheet: the fit then settles between the skins (its rms
+// near half the thickness). The skin the scan sees is the one most points' nearest samples lie
+// on (only the sample spacing separates a point from it, the thickness adds to the other's);
+// every point then pairs only with samples facing that way (registration/facing.hpp). A scan
+// that brings its normals (toward the scanner) says it per point instead: two passes from both
+// sides of a standing flange see both of its skins. A surface model has one skin: nearest pairs.
+std::vector<Vec3> seen_side_normals(const KdTree& tree, const std::vector<Vec3>& normals,
+                                    const std::vector<Vec3>& source) {
+  // The flange's normal direction, sign aside: the principal axis of the nearest samples'
+  // normals (edge and hole faces among them weigh little).
+  std::vector<std::uint32_t> nearest(source.size());
+  Mat3 scatter = Mat3::Zero();
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    nearest[i] = tree.nearest(source[i])->index;
+    scatter += normals[nearest[i]] * normals[nearest[i]].transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(scatter);
+  const Vec3 axis = eig.eigenvectors().col(2);
+  long votes = 0;
+  for (std::uint32_t j : nearest) {
+    const double c = normals[j].dot(axis);
+    if (std::abs(c) > 0.5) votes += c > 0.0 ? 1 : -1;
+  }
+  return std::vector<Vec3>(source.size(), votes >= 0 ? axis : Vec3(-axis));
 }
 
 std::optional<Error> check_inputs(const LocalFitTarget& target, const PointCloud& scan,
@@ -55,7 +84,10 @@ std::optional<Error> check_inputs(const LocalFitTarget& target, const PointCloud
 }  // namespace
 
 LocalFitTarget::LocalFitTarget(const PartModel& model)
-    : model_(&model), tree_(model.samples.points) {}
+    : model_(&model),
+      tree_(model.samples.points),
+      two_skins_(std::any_of(model.segmentation.flanges.begin(), model.segmentation.flanges.end(),
+                             [](const Flange& f) { return f.thickness_mm > 0.0; })) {}
 
 IcpSettings icp_settings(const LocalFitSettings& st) {
   IcpSettings s;
@@ -94,8 +126,18 @@ Expected<LocalFitResult> local_fit(const LocalFitTarget& target, const PointClou
   const PartModel& model = target.model();
   // ICP: find the pairs, then solve the point-to-plane problem on them to convergence (a few
   // Gauss-Newton steps); stop when fresh pairs no longer move the subset.
-  const IcpPairSearch search = st.correspondence == LocalFitCorrespondence::kExactSurface
-                                   ? exact_surface_pairs(model, st.max_correspondence_distance_mm)
+  const bool exact = st.correspondence == LocalFitCorrespondence::kExactSurface;
+  const bool facing = !exact && target.two_skins();
+  std::vector<Vec3> seen;
+  if (facing && scan.normals.size() == scan.size()) {
+    for (std::uint32_t i : indices) seen.push_back(scan.normals[i]);
+  } else if (facing) {
+    seen = seen_side_normals(target.tree(), model.samples.normals, source);
+  }
+  const IcpPairSearch search = exact ? exact_surface_pairs(model, st.max_correspondence_distance_mm)
+                               : facing
+                                   ? nearest_facing_pairs(target.tree(), model.samples.normals,
+                                                          seen, st.max_correspondence_distance_mm)
                                    : nearest_point_pairs(target.tree(), model.samples.normals,
                                                          st.max_correspondence_distance_mm);
   auto fit = icp(source, search, Transform::Identity(), icp_settings(st));

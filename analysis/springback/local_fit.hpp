@@ -53,10 +53,13 @@ class LocalFitTarget {
   explicit LocalFitTarget(const PartModel& model);
   const PartModel& model() const { return *model_; }
   const KdTree& tree() const { return tree_; }
+  /// The model is a solid sheet (a flange has two skins): pairs follow the facing rule.
+  bool two_skins() const { return two_skins_; }
 
  private:
   const PartModel* model_;
   KdTree tree_;
+  bool two_skins_ = false;
 };
 
 struct LocalFitResult {

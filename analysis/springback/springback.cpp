@@ -31,6 +31,10 @@ std::string check(const PartModel& model, const SpringbackSettings& st) {
            " outside (0, 10000]";
   if (st.shape.min_stations < 1 || st.shape.min_stations > 1000)
     return "shape.min_stations " + std::to_string(st.shape.min_stations) + " outside [1, 1000]";
+  if (!(st.max_fit_rms_ratio >= 0.0))
+    return "max_fit_rms_ratio " + std::to_string(st.max_fit_rms_ratio) + " must be >= 0";
+  if (!(st.hem_angle_deg > 0.0 && st.hem_angle_deg <= 180.0))
+    return "hem_angle_deg " + std::to_string(st.hem_angle_deg) + " outside (0, 180]";
   if (st.max_scan_points < 0)
     return "max_scan_points " + std::to_string(st.max_scan_points) + " must be >= 0";
   const auto& flanges = model.segmentation.flanges;
@@ -150,6 +154,47 @@ FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const
   return out;
 }
 
+// A fit whose rms stays far above the other flanges' (the scan's noise as the fits see it)
+// measures no plane of the scan, nor does one that ran out of iterations above that noise: its
+// bends get no angle, and the status keeps its figures. (A fit at its iteration cap within the
+// noise is kept: outliers can keep pairs changing by a hair long after the plane is found; the
+// report's local_fit.converged says so.)
+void reject_poor_fits(std::vector<FlangeFit>& flanges, const SpringbackSettings& st) {
+  std::vector<double> rms;
+  for (const FlangeFit& f : flanges)
+    if (f.fitted) rms.push_back(f.fit.rms_mm);
+  if (rms.empty() || !(st.max_fit_rms_ratio > 0.0)) return;
+  std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
+  const double median = rms[rms.size() / 2];
+  constexpr double kUnconvergedRatio = 2.0;  // an unconverged fit must be this near the noise
+  for (FlangeFit& f : flanges) {
+    if (!f.fitted) continue;
+    const std::string figures = "rms " + std::to_string(f.fit.rms_mm) + " mm over " +
+                                std::to_string(f.fit.points) + " points, the median flange fit " +
+                                std::to_string(median) + " mm";
+    if (!f.fit.converged && f.fit.rms_mm > kUnconvergedRatio * median) {
+      f.fitted = false;
+      f.status = "flange " + std::to_string(f.flange_id) + ": local fit not converged after " +
+                 std::to_string(f.fit.iterations) + " iterations (" + figures + ")";
+    } else if (f.fit.rms_mm > st.max_fit_rms_ratio * median) {
+      f.fitted = false;
+      f.status = "flange " + std::to_string(f.flange_id) + ": local fit " + figures + ": above " +
+                 std::to_string(st.max_fit_rms_ratio) + " x the median, not a plane of the scan";
+    }
+  }
+}
+
+// A closed hem keeps its figures from the fits, but is listed as not measurable.
+void mark_closed_hem(BendMeasurement& m, const SpringbackSettings& st) {
+  if (m.nominal_angle_deg < st.hem_angle_deg) return;
+  m.measurable = false;
+  m.measured = false;
+  m.status = "bend " + std::to_string(m.bend_id) + " not measurable: a closed hem (nominal " +
+             std::to_string(m.nominal_angle_deg) +
+             " deg), its folded flange lies on the sheet and a flange fit cannot tell its "
+             "springback";
+}
+
 }  // namespace
 
 // The signed angle from u to v about `axis`, from the full angle between them (degrees).
@@ -255,6 +300,7 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
   // 3. Fit each flange locally to the whole model.
   for (std::size_t f = 0; f < seg.flanges.size(); ++f)
     result.flanges.push_back(fit_flange(target, scan, seg.flanges[f], std::move(assigned[f]), st));
+  reject_poor_fits(result.flanges, st);
   // 4. Each bend from the relative rotation of its two flanges.
   const auto index_of = [&seg](int id) {
     const auto it = std::find_if(seg.flanges.begin(), seg.flanges.end(),
@@ -265,6 +311,7 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
     const std::size_t a = index_of(bend.flange_a), b = index_of(bend.flange_b);
     result.bends.push_back(
         measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b]));
+    mark_closed_hem(result.bends.back(), st);
   }
   // 5. Beyond rigid flanges: flange shape, bend radius, the angle along each bend.
   const std::vector<std::vector<std::uint32_t>> zone_points(

@@ -40,6 +40,11 @@ struct SpringbackSettings {
   double bend_margin_mm = 2.0;          ///< flange samples this close to a bend are left out
   double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
   int min_points_per_flange = 200;      ///< fewer: not fitted, its bends are not measured
+  /// A flange fit whose rms exceeds this x the median rms of the part's flange fits is not a
+  /// plane of the scan (points of other faces, a skin it cannot see): not fitted, with its
+  /// figures. The median is the scan's noise as the fits see it. 0 = off.
+  double max_fit_rms_ratio = 5.0;
+  double hem_angle_deg = 175.0;  ///< bends at least this sharp are closed hems: not measurable
   /// The scan is thinned by a fixed stride to at most this many points (0: every point).
   std::int64_t max_scan_points = 100000;
   /// Worker threads, 0 = all cores (overrides local_fit.threads); the result does not depend
@@ -97,6 +102,9 @@ struct BendMeasurement {
   double angle_twist_deg = 0.0;     ///< last station's angle - first's
   BendZoneFit zone;                 ///< the bend zone's cylinder, one side of the sheet
   double measured_radius_mm = 0.0;  ///< inner radius from the zone (zone.fitted: whether)
+  /// False for a closed hem (nominal >= hem_angle_deg): its folded flange lies on the sheet,
+  /// a flange fit cannot tell its springback; listed, never failing the part by itself.
+  bool measurable = true;
 };
 
 struct SpringbackResult {

@@ -26,7 +26,9 @@ TEST(PipelineFitHealth, ALargePerfectPartPasses) {
   std::mt19937 rng(5);
   std::normal_distribution<double> noise(0.0, 0.01);
   for (std::size_t i = 0; i < scan->size(); ++i) scan->points[i] += noise(rng) * scan->normals[i];
-  scan->normals.clear();
+  // The normals stay: scanned all round, the part has no one viewpoint that normals estimated
+  // from the points could be turned towards, and on a solid the fit pairs by the side a point
+  // faces (registration/facing.hpp).
   scan->face_ids.clear();
 
   // The scan is in the CAD frame: ICP starts there. The alignment of near-symmetric parts from

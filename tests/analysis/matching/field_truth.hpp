@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/cad/distance.hpp"
 #include "analysis/core/kdtree.hpp"
 #include "analysis/inspection/pipeline.hpp"
 #include "simulators/parts/cad_profile.hpp"
@@ -51,6 +52,16 @@ inline const parts::CadPart& field_part(const std::string& name, const parts::Pr
   return cache.emplace(name, part ? std::move(*part) : parts::CadPart{}).first->second;
 }
 
+/// `cad`'s model with the exact distance to its CAD surface, as the station loads it
+/// (load_part_model); load_cad_part leaves it out. Built once per part.
+inline const PartModel& exact_model(const parts::CadPart& cad) {
+  static std::map<const parts::CadPart*, PartModel> cache;
+  if (auto it = cache.find(&cad); it != cache.end()) return it->second;
+  PartModel model = cad.model;
+  model.distance = make_cad_distance(cad.shape);
+  return cache.emplace(&cad, std::move(model)).first->second;
+}
+
 struct FieldScenario {
   std::vector<double> springback_deg;  ///< one per bend (the last value repeats)
   Transform pose = Transform::Identity();
@@ -76,10 +87,12 @@ inline double p95(std::vector<double> v) {
 
 struct FieldRun {
   v1::InspectionReport report;
-  std::vector<Vec3> truth;          ///< per model control point (report index), result frame
-  std::vector<Vec3> truth_normal;   ///< the produced surface normal there, result frame
-  std::vector<int> scanned_points;  ///< truth scan points (not outliers) within 1.5 mm
-  std::vector<Vec3> control;        ///< control points (CAD), by model index
+  std::vector<Vec3> truth;              ///< per model control point (report index), result frame
+  std::vector<Vec3> truth_normal;       ///< the produced surface normal there, result frame
+  std::vector<int> scanned_points;      ///< truth scan points (not outliers) within 1.5 mm
+  std::vector<Vec3> control;            ///< control points (CAD), by model index
+  std::vector<parts::BendTruth> bends;  ///< the produced part's bends (springback applied)
+  Transform T_result_part = Transform::Identity();  ///< the report's frame from the part's
 };
 
 inline Transform from_row_major(const google::protobuf::RepeatedField<double>& m) {
@@ -125,11 +138,13 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
     append(scan.cad_points, pass->cad_points);
     append(scan.outlier, pass->outlier);
   }
-  auto outcome = run_inspection(cad.model, scan.cloud, settings);
+  auto outcome = run_inspection(exact_model(cad), scan.cloud, settings);
   EXPECT_TRUE(outcome) << outcome.message();
   if (!outcome) return run;
   run.report = std::move(outcome->report);
   const Transform T_result_part = from_row_major(run.report.global_fit().transform()) * sc.pose;
+  run.T_result_part = T_result_part;
+  run.bends = part->bends;
 
   // Control points: the report's model points (k-center picks of the model samples).
   const auto& field = run.report.deformation_field();

@@ -1,0 +1,54 @@
+#include "analysis/registration/facing.hpp"
+
+#include <array>
+#include <limits>
+
+namespace springscan::analysis {
+
+std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec3>& normals,
+                                       const Vec3& query, const Vec3& normal,
+                                       double max_distance_mm) {
+  if (normal.isZero()) return tree.nearest(query, max_distance_mm);
+  std::array<std::uint32_t, kFacingNeighbors> index{};
+  std::array<double, kFacingNeighbors> d2{};
+  const std::size_t found = tree.knn(query, kFacingNeighbors, index.data(), d2.data());
+  const double limit2 = max_distance_mm * max_distance_mm;
+  for (std::size_t k = 0; k < found && d2[k] <= limit2; ++k)
+    if (normals[index[k]].dot(normal) > 0.0) return Neighbor{index[k], d2[k]};
+  return std::nullopt;
+}
+
+double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& normals,
+                               const Vec3& query, const Vec3& normal) {
+  std::array<std::uint32_t, kFacingNeighbors> index{};
+  std::array<double, kFacingNeighbors> d2{};
+  const std::size_t found = tree.knn(query, kFacingNeighbors, index.data(), d2.data());
+  if (found == 0) return std::numeric_limits<double>::infinity();
+  if (normal.isZero()) return d2[0];
+  for (std::size_t k = 0; k < found; ++k)
+    if (normals[index[k]].dot(normal) > 0.0) return d2[k];
+  return d2[found - 1];
+}
+
+IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
+                                   const std::vector<Vec3>& source_normals,
+                                   double max_distance_mm) {
+  const double limit =
+      max_distance_mm > 0.0 ? max_distance_mm : std::numeric_limits<double>::infinity();
+  return [&tree, &normals, &source_normals, limit](const std::vector<Vec3>& source,
+                                                   const Transform& T, std::size_t begin,
+                                                   std::size_t end, std::vector<IcpPair>& pairs) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const auto hit =
+          nearest_facing(tree, normals, T * source[i], T.linear() * source_normals[i], limit);
+      IcpPair& p = pairs[i];
+      p.valid = hit.has_value();
+      if (!hit) continue;
+      p.point = tree.points()[hit->index];
+      p.normal = normals[hit->index];
+      p.squared_distance_mm2 = hit->squared_distance;
+    }
+  };
+}
+
+}  // namespace springscan::analysis

@@ -1,0 +1,50 @@
+#pragma once
+// Solid sheets seen from one side. A CAD solid has two skins a sheet thickness apart, its
+// samples' normals pointing out of the material; a scanner sees one skin, its points' normals
+// pointing back at the scanner. The nearest model sample of a scan point may lie on either skin
+// (the fit starts a few millimetres off, and 1-2 mm is all that separates them), and a fit that
+// pairs with the far skin settles one thickness off or chooses the part turned over. The rule
+// here: a scan point pairs only with model samples that face the same way as the point, once
+// the point's normal is turned into the model frame (their normals agree in sign). Used by
+// every pairing of the global fit: the PCA candidates, the orientation choice and the final ICP.
+
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "analysis/core/kdtree.hpp"
+#include "analysis/registration/icp.hpp"
+
+namespace springscan::analysis {
+
+/// How many nearest samples are searched for one that faces the point's way: both skins
+/// together hold about twice the samples of one within any radius.
+inline constexpr std::size_t kFacingNeighbors = 16;
+
+/// The nearest of `tree`'s points within `max_distance` whose normal (`normals`, one per point)
+/// has a positive dot product with `normal`, among its kFacingNeighbors nearest; the nearest
+/// point when `normal` is zero (a scan point whose normal is undefined). Nothing otherwise.
+std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec3>& normals,
+                                       const Vec3& query, const Vec3& normal,
+                                       double max_distance_mm);
+
+/// The squared distance from `query` to the nearest sample facing `normal` (as nearest_facing,
+/// no limit); when none of the searched samples faces that way, the squared distance to the
+/// farthest of them, a lower bound (a score counts the point as at least that far off).
+double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& normals,
+                               const Vec3& query, const Vec3& normal);
+
+/// ICP pairs by nearest_facing: source point i with normal T.linear() * source_normals[i].
+/// Holds references to all three vectors; `source_normals` must have one normal per point of
+/// the source the search is called with, `normals` one per tree point.
+IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
+                                   const std::vector<Vec3>& source_normals,
+                                   double max_distance_mm);
+
+/// True when every point of `points` has a normal and the rule can apply.
+inline bool has_facing_normals(const std::vector<Vec3>& points, const std::vector<Vec3>& normals) {
+  return !points.empty() && normals.size() == points.size();
+}
+
+}  // namespace springscan::analysis
