@@ -39,8 +39,7 @@ double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& norm
 /// Holds references to all three vectors; `source_normals` must have one normal per point of
 /// the source the search is called with, `normals` one per tree point.
 IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
-                                   const std::vector<Vec3>& source_normals,
-                                   double max_distance_mm);
+                                   const std::vector<Vec3>& source_normals, double max_distance_mm);
 
 /// True when every point of `points` has a normal and the rule can apply.
 inline bool has_facing_normals(const std::vector<Vec3>& points, const std::vector<Vec3>& normals) {

@@ -3,6 +3,8 @@
 // one side in two passes tilted +-35 deg (200k points, sigma 0.02 mm), analysed by
 // run_inspection with the exact CAD distance, as the station loads a part. Checked against the
 // constructed truth: the result frame of the global fit, and every bend's springback.
+#include "tests/simulators/parts/production_parts.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -11,7 +13,6 @@
 
 #include "tests/analysis/matching/field_truth.hpp"
 #include "tests/analysis/synthetic.hpp"
-#include "tests/simulators/parts/production_parts.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -28,6 +29,7 @@ struct PartExpectation {
   // the part's centroid (mm).
   double max_rotation_deg = 0.05;
   double max_shift_mm = 0.05;
+  double max_residual_mm = 0.1;  ///< the fit's residual to the surface, sigma 0.02 mm
 };
 
 void PrintTo(const PartExpectation& part, std::ostream* os) { *os << part.name; }
@@ -36,12 +38,15 @@ const std::vector<PartExpectation>& expectations() {
   static const std::vector<PartExpectation> parts = {
       {"openamr-MMP.03.00.00.003_Motor_bracket.step", 4},
       // Its main flange and the 34 deg flanges leave a rotation about the bend lines weakly
-      // fixed: 0.16 deg and 0.16 mm today (docs/alignment.md "Not yet right"); its bends are right to 0.01.
-      {"openamr-MMP.01.00.00.002_Cover_flange.step", 5, 0.2, 0.2},
+      // fixed: 0.16 deg and 0.16 mm today (docs/alignment.md "Not yet right"); its bends are right
+      // to 0.01.
+      {"openamr-MMP.01.00.00.002_Cover_flange.step", 5, 0.2, 0.2, 0.15},
       {"openamr-MMP.00.00.00.003_Side_panel.step", 4},
       {"openamr-MMP.00.00.00.001_Front_panel.step", 2},
       {"nema-17-bracket.step", 1}};
-  return parts;
+  // Under the sanitizers (5-15x slower) one part: they look for memory errors and races.
+  static const std::vector<PartExpectation> one(parts.begin(), parts.begin() + 1);
+  return testing::kUnderSanitizer ? one : parts;
 }
 
 class ProductionPart : public ::testing::TestWithParam<PartExpectation> {};
@@ -59,15 +64,14 @@ TEST_P(ProductionPart, ZeroSpringbackFitsThePose) {
   Vec3 centroid = Vec3::Zero();
   for (const Vec3& p : cad.model.samples.points) centroid += p;
   centroid /= static_cast<double>(cad.model.samples.size());
-  const double rotation_deg =
-      Eigen::AngleAxisd(T.linear()).angle() * 180.0 / std::numbers::pi;
+  const double rotation_deg = Eigen::AngleAxisd(T.linear()).angle() * 180.0 / std::numbers::pi;
   const double shift_mm = (T * centroid - centroid).norm();
   std::printf("%s: rotation %.4f deg, shift at the centroid %.4f mm, residual %.4f mm\n",
               part.name.c_str(), rotation_deg, shift_mm, run.report.global_fit().rms_residual());
   EXPECT_LE(rotation_deg, part.max_rotation_deg);
   EXPECT_LE(shift_mm, part.max_shift_mm);
   EXPECT_FALSE(run.report.global_fit().ambiguous());
-  EXPECT_LE(run.report.global_fit().rms_residual(), 0.1);
+  EXPECT_LE(run.report.global_fit().rms_residual(), part.max_residual_mm);
 }
 
 TEST_P(ProductionPart, SpringbackOfEveryBend) {
@@ -102,6 +106,33 @@ TEST_P(ProductionPart, SpringbackOfEveryBend) {
   std::printf("%s: %d bends measured, worst springback error %.4f deg\n", part.name.c_str(),
               measured, worst);
   EXPECT_GE(measured, part.measurable_bends);
+}
+
+// As the station's laser driver delivers a scan: points only, the part facing the scanner
+// (+z of the scan frame) within 30 deg.
+TEST_P(ProductionPart, PointsOnlyScanFitsThePose) {
+  const PartExpectation& part = GetParam();
+  const auto& cad = parts::testing::loaded_part(part.name);
+  FieldScenario sc;
+  sc.springback_deg = {0.0};
+  sc.scanner_normals = false;
+  sc.pose = Eigen::Translation3d(40.0, -25.0, 300.0) *
+            Eigen::AngleAxisd(0.5, Vec3(0.2, 0.3, 1.0).normalized());
+  const FieldRun run = testing::run_field_case(cad, sc);
+  const Transform& T = run.T_result_part;
+  const double rotation_deg = Eigen::AngleAxisd(T.linear()).angle() * 180.0 / std::numbers::pi;
+  std::printf("%s points only: rotation %.4f deg, residual %.4f mm, ambiguity %.3f\n",
+              part.name.c_str(), rotation_deg, run.report.global_fit().rms_residual(),
+              run.report.global_fit().orientation_ambiguity());
+  // The side panel's half turn about its normal fits within 0.04 mm when the scan's normals
+  // are estimated: then the part must be reported ambiguous (a verdict reason, a PLC result
+  // code), never turned silently.
+  if (run.report.global_fit().ambiguous()) {
+    EXPECT_FALSE(run.report.verdict().pass());
+    return;
+  }
+  EXPECT_LE(rotation_deg, part.max_rotation_deg);
+  EXPECT_LE(run.report.global_fit().rms_residual(), part.max_residual_mm);
 }
 
 INSTANTIATE_TEST_SUITE_P(Openamr, ProductionPart, ::testing::ValuesIn(expectations()),
