@@ -28,6 +28,23 @@ int bends_of(const PartSegmentation& seg, int flange_id) {
   }));
 }
 
+// The points of a flange on one skin. On a solid the scan may see both skins of a flange (two
+// passes from either side of a standing wall), a thickness apart: a shape fitted to both would
+// take the step for flatness and curl. The skin with more points is kept; on a surface model
+// (no thickness) all points.
+std::vector<std::uint32_t> one_skin(const PointCloud& scan,
+                                    const std::vector<std::uint32_t>& points,
+                                    const Flange& flange) {
+  const double t = flange.thickness_mm;
+  if (!(t > 0.0)) return points;
+  std::vector<std::uint32_t> near, far;
+  for (std::uint32_t i : points) {
+    const double h = flange.normal.dot(scan.points[i] - flange.point);
+    (std::abs(h) < 0.5 * t ? near : far).push_back(i);
+  }
+  return near.size() >= far.size() ? near : far;
+}
+
 // Flange f's shape in the frame of its bend line, and an end flange's free edge.
 void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
                          const std::vector<std::uint32_t>& points, const BendShapeSettings& st,
@@ -38,8 +55,9 @@ void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
   const Bend* bend = first_bend_of(seg, flange.id);
   fit.has_bend_line = bend != nullptr;
   const Vec3 along = bend ? bend->axis_direction : flange.normal.unitOrthogonal();
-  const FlangeFrame frame = flange_frame(scan, fit.indices, flange.normal, along);
-  fit.shape = fit_flange_shape(scan, fit.indices, frame, st.flange);
+  const std::vector<std::uint32_t> skin = one_skin(scan, fit.indices, flange);
+  const FlangeFrame frame = flange_frame(scan, skin, flange.normal, along);
+  fit.shape = fit_flange_shape(scan, skin, frame, st.flange);
   if (!fit.has_bend_line) {  // no direction across: a curl radius or a twist means nothing
     fit.shape.curled = false;
     fit.shape.surface.A = 0.0;

@@ -154,32 +154,62 @@ FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const
   return out;
 }
 
+// A curled wall's plane fit stays far above the noise, and rightly. The curl explains it when
+// it is a curl: its radius larger than the flange's extent across (a few millimetres is a fold,
+// or stray points of other faces) and nearly all points within the shape fit's inlier band.
+bool curl_explains_fit(const FlangeShape& shape) {
+  constexpr double kMinInlierShare = 0.9;
+  if (!shape.measured || !shape.curled || shape.local.empty()) return false;
+  double s_min = shape.local.front().x(), s_max = s_min;
+  for (const Vec3& q : shape.local) s_min = std::min(s_min, q.x()), s_max = std::max(s_max, q.x());
+  return std::abs(shape.curl_radius_mm) > s_max - s_min &&
+         static_cast<double>(shape.inliers) >=
+             kMinInlierShare * static_cast<double>(shape.local.size());
+}
+
 // A fit whose rms stays far above the other flanges' (the scan's noise as the fits see it)
-// measures no plane of the scan, nor does one that ran out of iterations above that noise: its
+// measures no plane of the scan, nor does one that ran out of iterations above that noise,
+// unless the flange's shape explains it (a curled wall bows millimetres from any plane): its
 // bends get no angle, and the status keeps its figures. (A fit at its iteration cap within the
 // noise is kept: outliers can keep pairs changing by a hair long after the plane is found; the
-// report's local_fit.converged says so.)
-void reject_poor_fits(std::vector<FlangeFit>& flanges, const SpringbackSettings& st) {
+// report's local_fit.converged says so.) Runs after the shapes, which it reads.
+void reject_poor_fits(SpringbackResult& result, const SpringbackSettings& st) {
   std::vector<double> rms;
-  for (const FlangeFit& f : flanges)
+  for (const FlangeFit& f : result.flanges)
     if (f.fitted) rms.push_back(f.fit.rms_mm);
   if (rms.empty() || !(st.max_fit_rms_ratio > 0.0)) return;
   std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
   const double median = rms[rms.size() / 2];
   constexpr double kUnconvergedRatio = 2.0;  // an unconverged fit must be this near the noise
-  for (FlangeFit& f : flanges) {
-    if (!f.fitted) continue;
+  for (FlangeFit& f : result.flanges) {
+    if (!f.fitted || curl_explains_fit(f.shape)) continue;
     const std::string figures = "rms " + std::to_string(f.fit.rms_mm) + " mm over " +
                                 std::to_string(f.fit.points) + " points, the median flange fit " +
                                 std::to_string(median) + " mm";
     if (!f.fit.converged && f.fit.rms_mm > kUnconvergedRatio * median) {
-      f.fitted = false;
       f.status = "flange " + std::to_string(f.flange_id) + ": local fit not converged after " +
                  std::to_string(f.fit.iterations) + " iterations (" + figures + ")";
     } else if (f.fit.rms_mm > st.max_fit_rms_ratio * median) {
-      f.fitted = false;
       f.status = "flange " + std::to_string(f.flange_id) + ": local fit " + figures + ": above " +
                  std::to_string(st.max_fit_rms_ratio) + " x the median, not a plane of the scan";
+    } else {
+      continue;
+    }
+    f.fitted = false;
+    for (BendMeasurement& b : result.bends) {
+      if (!b.measured || (b.flange_a != f.flange_id && b.flange_b != f.flange_id)) continue;
+      // Only the nominal geometry stays: every measured figure of the bend went through the fit.
+      BendMeasurement m;
+      m.bend_id = b.bend_id;
+      m.flange_a = b.flange_a;
+      m.flange_b = b.flange_b;
+      m.face_ids = b.face_ids;
+      m.axis_point = b.axis_point;
+      m.axis_direction = b.axis_direction;
+      m.radius_mm = b.radius_mm;
+      m.nominal_angle_deg = b.nominal_angle_deg;
+      m.status = "bend " + std::to_string(b.bend_id) + " not measured: " + f.status;
+      b = std::move(m);
     }
   }
 }
@@ -300,7 +330,6 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
   // 3. Fit each flange locally to the whole model.
   for (std::size_t f = 0; f < seg.flanges.size(); ++f)
     result.flanges.push_back(fit_flange(target, scan, seg.flanges[f], std::move(assigned[f]), st));
-  reject_poor_fits(result.flanges, st);
   // 4. Each bend from the relative rotation of its two flanges.
   const auto index_of = [&seg](int id) {
     const auto it = std::find_if(seg.flanges.begin(), seg.flanges.end(),
@@ -318,6 +347,7 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
       std::make_move_iterator(assigned.begin() + static_cast<std::ptrdiff_t>(seg.flanges.size())),
       std::make_move_iterator(assigned.end()));
   measure_shapes(model, scan, order, zones, zone_points, st.shape, st.threads, result);
+  reject_poor_fits(result, st);
   return result;
 }
 
