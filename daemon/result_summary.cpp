@@ -151,6 +151,22 @@ std::string result_summary_json(const v1::InspectionReport& report, const Publis
     w.field("springback_deg", b.springback_deg());
     w.field("angle_tolerance_deg", b.angle_tolerance_deg());
     w.field("pass", b.pass());
+    if (b.angle_along_bend_size() > 0) w.field("angle_spread_deg", b.angle_spread_deg());
+    if (b.has_measured_radius_mm()) w.field("measured_radius_mm", b.measured_radius_mm());
+    if (!b.status().empty()) w.field("status", b.status());
+    w.end_object();
+  }
+  w.end_array();
+  // The flange shape (docs/springback.md "Beyond rigid flanges"): curl and twist only where
+  // measured, as in the report.
+  w.begin_array("flanges");
+  for (const v1::Segment& seg : report.segments()) {
+    w.begin_object();
+    w.field("id", static_cast<std::int64_t>(seg.id()));
+    w.field("flatness_mm", seg.flatness_mm());
+    w.field("flatness_rms_mm", seg.flatness_rms_mm());
+    if (seg.has_curl_radius_mm()) w.field("curl_radius_mm", seg.curl_radius_mm());
+    if (seg.has_twist_deg_per_100mm()) w.field("twist_deg_per_100mm", seg.twist_deg_per_100mm());
     w.end_object();
   }
   w.end_array();

@@ -89,6 +89,34 @@ ControlChart control_chart(const std::vector<double>& values, std::optional<doub
   return c;
 }
 
+namespace {
+
+// Beyond rigid flanges: each bend's angle spread along the bend, each flange's flatness, curl
+// radius and twist where the report measured them, with the verdict's limits in force.
+template <typename Add>
+void add_shape_characteristics(const v1::InspectionReport& r, const Add& add) {
+  const v1::VerdictSettings& limits = r.settings().verdict();
+  const auto upper = [](bool has, double v) {
+    return has && v > 0 ? std::optional<double>(v) : std::nullopt;
+  };
+  for (const v1::Bend& b : r.bends())
+    if (b.measured() && b.angle_along_bend_size() > 0)
+      add(r, "bend " + std::to_string(b.id()) + " angle spread", "deg", b.angle_spread_deg(),
+          std::nullopt, upper(limits.has_max_angle_spread_deg(), limits.max_angle_spread_deg()));
+  for (const v1::Segment& seg : r.segments()) {
+    const std::string name = "flange " + std::to_string(seg.id());
+    if (seg.points() > 0)
+      add(r, name + " flatness", "mm", seg.flatness_mm(), std::nullopt,
+          upper(limits.has_max_flatness_mm(), limits.max_flatness_mm()));
+    if (seg.has_curl_radius_mm())
+      add(r, name + " curl radius", "mm", seg.curl_radius_mm(), std::nullopt, std::nullopt);
+    if (seg.has_twist_deg_per_100mm())
+      add(r, name + " twist", "deg/100 mm", seg.twist_deg_per_100mm(), std::nullopt, std::nullopt);
+  }
+}
+
+}  // namespace
+
 std::vector<Characteristic> collect_characteristics(
     const std::vector<v1::InspectionReport>& reports) {
   std::vector<Characteristic> out;
@@ -117,6 +145,7 @@ std::vector<Characteristic> collect_characteristics(
           tol > 0 ? std::optional<double>(-tol) : std::nullopt,
           tol > 0 ? std::optional<double>(tol) : std::nullopt);
     }
+    add_shape_characteristics(r, add);
     if (r.has_deviation() && r.deviation().points() > 0) {
       const v1::Deviation& d = r.deviation();
       const std::optional<double> usl =

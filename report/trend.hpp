@@ -56,7 +56,7 @@ ControlChart control_chart(const std::vector<double>& values, std::optional<doub
 struct Characteristic {
   std::string part_id;
   std::string name;  ///< "bend 2 springback", "deviation max |d|", "deviation p95"
-  std::string unit;  ///< "deg" or "mm"
+  std::string unit;  ///< "deg", "mm" or "deg/100 mm"
   std::optional<double> lsl, usl;
   std::vector<double> values;
   std::vector<std::string> labels;  ///< per value: which report ("seq 12, job 5, 2026-...")

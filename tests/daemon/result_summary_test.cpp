@@ -30,6 +30,14 @@ TEST(ResultSummaryTest, HoldsTheIdsVerdictDeviationAndBendTable) {
   b->set_id(3);
   b->set_springback_deg(-0.1);
   b->set_measured(true);
+  b->set_angle_spread_deg(0.25);
+  b->add_angle_along_bend()->set_angle_deg(89.0);
+  v1::Segment* curled = r.add_segments();
+  curled->set_id(1);
+  curled->set_flatness_mm(0.8);
+  curled->set_curl_radius_mm(-420.0);
+  curled->set_twist_deg_per_100mm(0.3);
+  r.add_segments()->set_id(2);  // flat: no curl radius, no twist
   const std::string json = result_summary_json(r, PublishedIds{"press-4", 513, 90001, 24466});
   EXPECT_EQ(json.find('\n'), std::string::npos);  // one line
   const auto s = parse(json);
@@ -50,6 +58,15 @@ TEST(ResultSummaryTest, HoldsTheIdsVerdictDeviationAndBendTable) {
   EXPECT_EQ(bend.at("id").number_value(), 3);
   EXPECT_EQ(bend.at("springback_deg").number_value(), -0.1);  // shortest round trip, exact
   EXPECT_TRUE(bend.at("measured").bool_value());
+  EXPECT_EQ(bend.at("angle_spread_deg").number_value(), 0.25);
+  EXPECT_EQ(bend.count("measured_radius_mm"), 0u);  // not fitted: absent
+  const auto& flanges = f.at("flanges").list_value();
+  ASSERT_EQ(flanges.values_size(), 2);
+  const auto& one = flanges.values(0).struct_value().fields();
+  EXPECT_EQ(one.at("flatness_mm").number_value(), 0.8);
+  EXPECT_EQ(one.at("curl_radius_mm").number_value(), -420.0);
+  EXPECT_EQ(one.at("twist_deg_per_100mm").number_value(), 0.3);
+  EXPECT_EQ(flanges.values(1).struct_value().fields().count("curl_radius_mm"), 0u);
 }
 
 TEST(ResultSummaryTest, EmptyReportAndNonFiniteNumbersStayValidJson) {

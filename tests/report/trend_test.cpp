@@ -180,6 +180,38 @@ TEST(TrendCharacteristics, PerPartAndBendSortedByCpk) {
   EXPECT_NEAR(*by_name.at("1/bend 2 springback")->chart.cpk, 0.15 * 1.128 / 0.3, 1e-12);
 }
 
+// Each flange's flatness, curl and twist, and each bend's angle spread, when the report has them,
+// with the verdict's limits in force.
+TEST(TrendCharacteristics, FlangeShapeAndAngleSpread) {
+  std::vector<v1::InspectionReport> reports;
+  for (int k = 1; k <= 3; ++k) {
+    v1::InspectionReport r =
+        make_report("5", k, "2026-12-02T08:0" + std::to_string(k) + ":00Z", {0.5}, 0.1, 0.2);
+    r.mutable_settings()->mutable_verdict()->set_max_flatness_mm(1.0);
+    r.mutable_bends(0)->add_angle_along_bend()->set_angle_deg(88.0);
+    r.mutable_bends(0)->set_angle_spread_deg(0.1 * k);
+    v1::Segment* wall = r.add_segments();
+    wall->set_id(2);
+    wall->set_points(500);
+    wall->set_flatness_mm(0.3 + 0.1 * k);
+    if (k != 2) wall->set_curl_radius_mm(-300.0 - k);  // flat within noise in report 2
+    wall->set_twist_deg_per_100mm(0.05 * k);
+    reports.push_back(r);
+  }
+  std::map<std::string, const Characteristic*> by_name;
+  const auto cs = collect_characteristics(reports);
+  for (const auto& c : cs) by_name[c.name] = &c;
+  EXPECT_EQ(by_name.at("bend 1 angle spread")->values,
+            (std::vector<double>{0.1, 0.2, 0.30000000000000004}));
+  const Characteristic& flat = *by_name.at("flange 2 flatness");
+  EXPECT_EQ(flat.values.size(), 3u);
+  EXPECT_EQ(flat.usl, 1.0);
+  EXPECT_FALSE(flat.lsl);
+  EXPECT_EQ(by_name.at("flange 2 curl radius")->values, (std::vector<double>{-301.0, -303.0}));
+  EXPECT_EQ(by_name.at("flange 2 twist")->unit, "deg/100 mm");
+  EXPECT_EQ(by_name.at("flange 2 twist")->values.size(), 3u);
+}
+
 class TrendFiles : public ::testing::Test {
  protected:
   void SetUp() override {
