@@ -30,10 +30,6 @@ parts {
   cad_file: "$root/demo/motor-bracket.step"
   settings {
     verdict { tolerance_mm: 0.5 angle_tolerance_deg: 1.0 }
-    # The walls are some 12 mm of flat sheet between their bends: at 0.02 mm scanner noise their
-    # fitted curl bows 0.03-0.04 mm, above the 0.03 mm default that calls a flange curled
-    # (and measures its bends by end tangents). The produced part has none.
-    springback { min_curl_sagitta_mm: 0.1 }
   }
 }
 report_dir: "$out/reports"
