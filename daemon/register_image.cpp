@@ -93,11 +93,18 @@ void RegisterImage::publish_result(const ResultBlock& block) {
     const auto base = static_cast<std::uint16_t>(regs::kIrBendTable + j * regs::kBendRecordSize);
     ir[base + regs::kBendId] = b.id;
     ir[base + regs::kBendFlags] = static_cast<std::uint16_t>(
-        (b.measured ? regs::kBendMeasured : 0) | (b.pass ? regs::kBendPass : 0));
+        (b.measured ? regs::kBendMeasured : 0) | (b.pass ? regs::kBendPass : 0) |
+        (b.measurable ? 0 : regs::kBendNotMeasurable));
     put_int32(static_cast<std::uint16_t>(base + regs::kBendSpringback),
               regs::deg_to_mdeg(b.springback_deg));
     put_int32(static_cast<std::uint16_t>(base + regs::kBendMeasuredAngle),
               regs::deg_to_mdeg(b.measured_angle_deg));
+    const auto shape =
+        static_cast<std::uint16_t>(regs::kIrBendShapeTable + j * regs::kBendShapeRecordSize);
+    put_int32(static_cast<std::uint16_t>(shape + regs::kBendAngleSpread),
+              regs::deg_to_mdeg(b.angle_spread_deg));
+    put_int32(static_cast<std::uint16_t>(shape + regs::kBendMeasuredRadius),
+              regs::mm_to_um(b.measured_radius_mm));
     if (b.measured && !b.pass) ++failed;
   }
   ir[regs::kIrBendsFailed] = failed;

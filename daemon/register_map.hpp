@@ -24,7 +24,7 @@ namespace springscan::daemon::regs {
 // dropping RESULT_VALID, PLC_COMM_LOST raises ERROR_CODE 7, PAGE_SELECT past the last page and
 // unit id 0 as below, ERROR_DETAIL 5..8 (stalled endpoint, sequence gap, protocol error, device
 // fault), which version 1 reported as 9.
-inline constexpr std::uint16_t kMapVersion = 2;
+inline constexpr std::uint16_t kMapVersion = 3;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
@@ -106,7 +106,15 @@ inline constexpr std::uint16_t kBendId = 0;
 inline constexpr std::uint16_t kBendFlags = 1;
 inline constexpr std::uint16_t kBendSpringback = 2;
 inline constexpr std::uint16_t kBendMeasuredAngle = 4;
-inline constexpr std::uint16_t kResultBlockEnd = kIrBendTable + kMaxBends * kBendRecordSize;
+// The bend shape table (map version 3), record j for bend record j: +0..1 the spread of the
+// bend angle along the bend line (max - min over its stations), +2..3 the measured inner radius
+// of the bend zone, um; kInvalidInt32 where the report has no such figure.
+inline constexpr std::uint16_t kIrBendShapeTable = kIrBendTable + kMaxBends * kBendRecordSize;
+inline constexpr std::uint16_t kBendShapeRecordSize = 4;
+inline constexpr std::uint16_t kBendAngleSpread = 0;
+inline constexpr std::uint16_t kBendMeasuredRadius = 2;
+inline constexpr std::uint16_t kResultBlockEnd =
+    kIrBendShapeTable + kMaxBends * kBendShapeRecordSize;
 
 // Input registers: the paged window, for PLCs that cannot address past 999.
 inline constexpr std::uint16_t kIrWindowPage = 800;  ///< echo of PAGE_SELECT
@@ -204,8 +212,9 @@ enum class RejectCode : std::uint16_t {
 
 /// Bend record flags.
 enum BendFlag : std::uint16_t {
-  kBendMeasured = 1u << 0,  ///< both flanges had enough points
-  kBendPass = 1u << 1,      ///< |springback| within the angle tolerance
+  kBendMeasured = 1u << 0,       ///< both flanges had enough points
+  kBendPass = 1u << 1,           ///< |springback| within the angle tolerance
+  kBendNotMeasurable = 1u << 2,  ///< a closed hem: listed, not judged (pass is set)
 };
 
 /// Vector record flags.

@@ -55,6 +55,13 @@ ResultBlock result_block_from_report(const v1::InspectionReport& report) {
     row.pass = bend.pass();
     row.springback_deg = finite_or_nan(bend.springback_deg());
     row.measured_angle_deg = finite_or_nan(bend.measured_angle_deg());
+    row.measurable = !bend.has_measurable() || bend.measurable();
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    row.angle_spread_deg = bend.measured() && bend.angle_along_bend_size() > 0
+                               ? finite_or_nan(bend.angle_spread_deg())
+                               : nan;
+    row.measured_radius_mm =
+        bend.has_measured_radius_mm() ? finite_or_nan(bend.measured_radius_mm()) : nan;
     block.bends.push_back(row);
   }
   block.vectors.reserve(

@@ -4,6 +4,7 @@
 // scales them to int32 um and millidegrees.
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "daemon/register_map.hpp"
@@ -17,6 +18,11 @@ struct BendRow {
   bool pass = false;
   double springback_deg = 0.0;  ///< nominal minus measured
   double measured_angle_deg = 0.0;
+  bool measurable = true;  ///< false: a closed hem
+  /// Along the bend line, max - min over its stations; NaN (no value) when not measured.
+  double angle_spread_deg = std::numeric_limits<double>::quiet_NaN();
+  /// The bend zone's inner radius; NaN (no value) when not fitted.
+  double measured_radius_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct VectorRow {

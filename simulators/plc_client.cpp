@@ -87,8 +87,10 @@ Expected<bool> PlcClient::write_control(std::uint16_t word) {
 
 Expected<ResultRead> PlcClient::read_result() {
   ResultRead r;
-  std::uint16_t block[regs::kResultBlockEnd - regs::kIrResultSeq];
-  constexpr int kBlockWords = regs::kResultBlockEnd - regs::kIrResultSeq;
+  // The result block up to the end of the bend records: 116 registers, one FC04 request (the
+  // bend shape table after it would make the request longer than Modbus allows).
+  std::uint16_t block[regs::kIrBendShapeTable - regs::kIrResultSeq];
+  constexpr int kBlockWords = regs::kIrBendShapeTable - regs::kIrResultSeq;
   if (modbus_read_input_registers(ctx_, regs::kIrResultSeq, kBlockWords, block) != kBlockWords) {
     return fail(modbus_error("read result block"));
   }

@@ -68,6 +68,11 @@ ResultBlock example_block() {
   block.cycle_time_ms = 1234;
   block.scan_points = 200000;
   block.bends = {{1, true, true, 0.5, 89.5}, {2, true, false, -2.25, 92.25}};
+  block.bends[0].angle_spread_deg = 0.0425;
+  block.bends[0].measured_radius_mm = 3.0125;
+  BendRow hem{3, false, true, 0.0, 0.0};
+  hem.measurable = false;
+  block.bends.push_back(hem);
   for (int i = 0; i < 300; ++i) {
     block.vectors.push_back({0.001 * i, -0.002 * i, 0.5});
   }
@@ -96,7 +101,7 @@ TEST_P(RegisterImageTest, ResultBlockEncodesEveryField) {
   EXPECT_EQ(i32(regs::kIrScanPoints), 200000);
   EXPECT_EQ(ir(regs::kIrVectorCount), 300);
   EXPECT_EQ(ir(regs::kIrVectorRecordSize), 8);
-  EXPECT_EQ(ir(regs::kIrBendCount), 2);
+  EXPECT_EQ(ir(regs::kIrBendCount), 3);
   EXPECT_EQ(ir(regs::kIrBendsFailed), 1);
   EXPECT_EQ(ir(regs::kIrResultReserved), 0);  // register 119: reserved, always 0
   const std::uint16_t bend2 = regs::kIrBendTable + regs::kBendRecordSize;
@@ -104,6 +109,15 @@ TEST_P(RegisterImageTest, ResultBlockEncodesEveryField) {
   EXPECT_EQ(ir(bend2 + regs::kBendFlags), regs::kBendMeasured);
   EXPECT_EQ(i32(bend2 + regs::kBendSpringback), -2250);
   EXPECT_EQ(i32(bend2 + regs::kBendMeasuredAngle), 92250);
+  // The bend shape table (map version 3) after the 16 bend records, one record per bend.
+  EXPECT_EQ(regs::kIrBendShapeTable, 216);
+  EXPECT_EQ(i32(regs::kIrBendShapeTable + regs::kBendAngleSpread), 43);  // 42.5 m° rounds up
+  EXPECT_EQ(i32(regs::kIrBendShapeTable + regs::kBendMeasuredRadius), 3013);
+  const std::uint16_t shape2 = regs::kIrBendShapeTable + regs::kBendShapeRecordSize;
+  EXPECT_EQ(i32(shape2 + regs::kBendAngleSpread), regs::kInvalidInt32);  // no stations
+  EXPECT_EQ(i32(shape2 + regs::kBendMeasuredRadius), regs::kInvalidInt32);
+  const std::uint16_t bend3 = regs::kIrBendTable + 2 * regs::kBendRecordSize;
+  EXPECT_EQ(ir(bend3 + regs::kBendFlags), regs::kBendPass | regs::kBendNotMeasurable);
   const std::uint16_t v299 = regs::kIrVectors + 299 * regs::kVectorRecordSize;
   EXPECT_EQ(ir(v299 + regs::kVectorIndex), 299);
   EXPECT_EQ(ir(v299 + regs::kVectorFlags), regs::kVectorValid);

@@ -18,7 +18,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Under ASan, UBSan or TSan the analysis runs 5-15x slower: a coarser grid there (the sanitizer
 // stages look for memory errors, the release suite for accuracy).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(SPRINGSCAN_TSAN)
 constexpr bool kUnderSanitizer = true;
 #else
 constexpr bool kUnderSanitizer = false;

@@ -25,8 +25,10 @@
 namespace springscan::analysis::testing {
 
 // Under ASan, UBSan or TSan the analysis runs 5-15x slower: repeated cases run once there (the
-// sanitizer stages look for memory errors and races, the release suite for accuracy).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+// sanitizer stages look for memory errors and races, the release suite for accuracy). The TSan
+// build undefines __SANITIZE_THREAD__ (protobuf's map layout, cmake/CompilerOptions.cmake) and
+// defines SPRINGSCAN_TSAN instead.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(SPRINGSCAN_TSAN)
 constexpr bool kUnderSanitizer = true;
 #else
 constexpr bool kUnderSanitizer = false;

@@ -18,7 +18,7 @@ using namespace springscan::parts;  // test and demo parts (simulators/parts)
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(SPRINGSCAN_TSAN)
 constexpr bool kUnderSanitizer = true;
 #else
 constexpr bool kUnderSanitizer = false;
