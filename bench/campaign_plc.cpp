@@ -1,6 +1,7 @@
 // The fault campaign's PLC program: the handshake of docs/modbus-register-map.md with the
 // recovery its "Reconnecting" and "Error codes" sections prescribe. What it collects is checked
 // in campaign_checks.cpp.
+#include <algorithm>
 #include <thread>
 
 #include "bench/fault_campaign_internal.hpp"
@@ -169,9 +170,15 @@ bool Campaign::read_block(ResultRegisters& out) {
   // Handshake step 5: RESULT_SEQ must agree before and after the reads.
   for (int attempt = 0; attempt < 3; ++attempt) {
     out.block.assign(kBlockWords, 0);
-    if (modbus_read_input_registers(plc_->context(), regs::kIrResultSeq, kBlockWords,
-                                    out.block.data()) != kBlockWords)
-      return false;
+    // In requests of at most kRecommendedChunk registers: the block is longer than one FC04
+    // request may be.
+    for (int done = 0; done < kBlockWords;) {
+      const int count = std::min<int>(regs::kRecommendedChunk, kBlockWords - done);
+      if (modbus_read_input_registers(plc_->context(), regs::kIrResultSeq + done, count,
+                                      out.block.data() + done) != count)
+        return false;
+      done += count;
+    }
     auto read = plc_->read_result();
     if (!read) return false;
     out.read = std::move(*read);

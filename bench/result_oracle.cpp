@@ -50,11 +50,21 @@ void put_bends(const v1::InspectionReport& report, BlockWriter& w) {
     const v1::Bend& b = report.bends(j);
     const auto base = static_cast<std::uint16_t>(regs::kIrBendTable + j * regs::kBendRecordSize);
     w.at(base + regs::kBendId) = static_cast<std::uint16_t>(std::clamp(b.id(), 0, 65535));
+    const bool measurable = !b.has_measurable() || b.measurable();
     w.at(base + regs::kBendFlags) = static_cast<std::uint16_t>(
-        (b.measured() ? regs::kBendMeasured : 0) | (b.pass() ? regs::kBendPass : 0));
+        (b.measured() ? regs::kBendMeasured : 0) | (b.pass() ? regs::kBendPass : 0) |
+        (measurable ? 0 : regs::kBendNotMeasurable));
     w.put32(static_cast<std::uint16_t>(base + regs::kBendSpringback), mdeg(b.springback_deg()));
     w.put32(static_cast<std::uint16_t>(base + regs::kBendMeasuredAngle),
             mdeg(b.measured_angle_deg()));
+    // The bend shape table: no value where the report has no such figure.
+    const double nan = std::nan("");
+    const auto shape =
+        static_cast<std::uint16_t>(regs::kIrBendShapeTable + j * regs::kBendShapeRecordSize);
+    w.put32(static_cast<std::uint16_t>(shape + regs::kBendAngleSpread),
+            mdeg(b.measured() && b.angle_along_bend_size() > 0 ? b.angle_spread_deg() : nan));
+    w.put32(static_cast<std::uint16_t>(shape + regs::kBendMeasuredRadius),
+            um(b.has_measured_radius_mm() ? b.measured_radius_mm() : nan));
     if (b.measured() && !b.pass()) ++failed;
   }
   w.at(regs::kIrBendsFailed) = failed;

@@ -18,7 +18,7 @@ namespace springscan::bench {
 
 namespace regs = daemon::regs;
 
-/// Input registers kIrResultSeq .. kResultBlockEnd, as one FC04 read returns them.
+/// Input registers kIrResultSeq .. kResultBlockEnd, as FC04 reads return them.
 using BlockWords = std::vector<std::uint16_t>;
 inline constexpr int kBlockWords = regs::kResultBlockEnd - regs::kIrResultSeq;
 
