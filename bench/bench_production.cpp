@@ -12,6 +12,7 @@
 
 #include "analysis/cad/model.hpp"
 #include "analysis/inspection/pipeline.hpp"
+#include "bench/inspection_loop.hpp"
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/produced_part.hpp"
 
@@ -81,17 +82,9 @@ void BM_InspectionSidePanel1M(benchmark::State& state) {
     state.SkipWithError(d.error.c_str());
     return;
   }
-  v1::AnalysisSettings settings;
-  settings.set_threads(static_cast<int>(state.range(0)));
-  v1::InspectionReport last;
-  for (auto _ : state) {
-    auto outcome = run_inspection(d.model, d.scan, settings);
-    if (!outcome) {
-      state.SkipWithError(outcome.message().c_str());
-      return;
-    }
-    last = outcome->report;
-  }
+  const auto report = springscan::bench::timed_inspections(state, d.model, d.scan);
+  if (!report) return;
+  const v1::InspectionReport& last = *report;
   const auto& t = last.timings_ms();
   state.counters["points"] = static_cast<double>(d.scan.size());
   state.counters["reduce_ms"] = t.reduce();

@@ -13,6 +13,7 @@
 #include "analysis/io/point_io.hpp"
 #include "analysis/registration/boundary.hpp"
 #include "analysis/registration/global_fit.hpp"
+#include "bench/inspection_loop.hpp"
 #include "tests/analysis/synthetic.hpp"
 
 namespace {
@@ -68,17 +69,9 @@ const Data& data() {
 
 void BM_Inspection1MScan100kModel(benchmark::State& state) {
   const Data& d = data();
-  v1::AnalysisSettings settings;
-  settings.set_threads(static_cast<int>(state.range(0)));
-  v1::InspectionReport last;
-  for (auto _ : state) {
-    auto outcome = run_inspection(d.model, d.scan, settings);
-    if (!outcome) {
-      state.SkipWithError(outcome.message().c_str());
-      return;
-    }
-    last = outcome->report;
-  }
+  const auto report = springscan::bench::timed_inspections(state, d.model, d.scan);
+  if (!report) return;
+  const v1::InspectionReport& last = *report;
   state.counters["reduce_ms"] = last.timings_ms().reduce();
   state.counters["fit_ms"] = last.timings_ms().global_fit();
   state.counters["deviation_ms"] = last.timings_ms().deviation();

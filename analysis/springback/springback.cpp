@@ -173,11 +173,13 @@ bool curl_explains_fit(const FlangeShape& shape) {
 // bends get no angle, and the status keeps its figures. (A fit at its iteration cap within the
 // noise is kept: outliers can keep pairs changing by a hair long after the plane is found; the
 // report's local_fit.converged says so.) Runs after the shapes, which it reads.
-void reject_poor_fits(SpringbackResult& result, const SpringbackSettings& st) {
+// Returns the Flange::id of every flange it rejected.
+std::vector<int> reject_poor_fits(SpringbackResult& result, const SpringbackSettings& st) {
+  std::vector<int> rejected;
   std::vector<double> rms;
   for (const FlangeFit& f : result.flanges)
     if (f.fitted) rms.push_back(f.fit.rms_mm);
-  if (rms.empty() || !(st.max_fit_rms_ratio > 0.0)) return;
+  if (rms.empty() || !(st.max_fit_rms_ratio > 0.0)) return rejected;
   std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
   const double median = rms[rms.size() / 2];
   constexpr double kUnconvergedRatio = 2.0;  // an unconverged fit must be this near the noise
@@ -196,22 +198,9 @@ void reject_poor_fits(SpringbackResult& result, const SpringbackSettings& st) {
       continue;
     }
     f.fitted = false;
-    for (BendMeasurement& b : result.bends) {
-      if (!b.measured || (b.flange_a != f.flange_id && b.flange_b != f.flange_id)) continue;
-      // Only the nominal geometry stays: every measured figure of the bend went through the fit.
-      BendMeasurement m;
-      m.bend_id = b.bend_id;
-      m.flange_a = b.flange_a;
-      m.flange_b = b.flange_b;
-      m.face_ids = b.face_ids;
-      m.axis_point = b.axis_point;
-      m.axis_direction = b.axis_direction;
-      m.radius_mm = b.radius_mm;
-      m.nominal_angle_deg = b.nominal_angle_deg;
-      m.status = "bend " + std::to_string(b.bend_id) + " not measured: " + f.status;
-      b = std::move(m);
-    }
+    rejected.push_back(f.flange_id);
   }
+  return rejected;
 }
 
 // A closed hem keeps its figures from the fits, but is listed as not measurable.
@@ -336,18 +325,27 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
                                  [id](const Flange& f) { return f.id == id; });
     return static_cast<std::size_t>(it - seg.flanges.begin());
   };
-  for (const Bend& bend : seg.bends) {
+  const auto bend_of = [&](const Bend& bend) {
     const std::size_t a = index_of(bend.flange_a), b = index_of(bend.flange_b);
-    result.bends.push_back(
-        measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b]));
-    mark_closed_hem(result.bends.back(), st);
-  }
+    BendMeasurement m =
+        measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b]);
+    mark_closed_hem(m, st);
+    return m;
+  };
+  for (const Bend& bend : seg.bends) result.bends.push_back(bend_of(bend));
   // 5. Beyond rigid flanges: flange shape, bend radius, the angle along each bend.
   const std::vector<std::vector<std::uint32_t>> zone_points(
       std::make_move_iterator(assigned.begin() + static_cast<std::ptrdiff_t>(seg.flanges.size())),
       std::make_move_iterator(assigned.end()));
   measure_shapes(model, scan, order, zones, zone_points, st.shape, st.threads, result);
-  reject_poor_fits(result, st);
+  // 6. Fits that measure no plane of the scan: their bends again, now without an angle.
+  const std::vector<int> rejected = reject_poor_fits(result, st);
+  const auto touches = [&rejected](const Bend& bend) {
+    return std::find(rejected.begin(), rejected.end(), bend.flange_a) != rejected.end() ||
+           std::find(rejected.begin(), rejected.end(), bend.flange_b) != rejected.end();
+  };
+  for (std::size_t k = 0; k < seg.bends.size(); ++k)
+    if (touches(seg.bends[k])) result.bends[k] = bend_of(seg.bends[k]);
   return result;
 }
 

@@ -10,19 +10,14 @@
 #include "simulators/parts/sheet_part.hpp"
 #include "tests/analysis/grid_mesh.hpp"
 #include "tests/analysis/profile_sampling.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 
 namespace springscan::analysis {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// Under ASan, UBSan or TSan the analysis runs 5-15x slower: a coarser grid there (the sanitizer
-// stages look for memory errors, the release suite for accuracy).
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(SPRINGSCAN_TSAN)
-constexpr bool kUnderSanitizer = true;
-#else
-constexpr bool kUnderSanitizer = false;
-#endif
+using testing::kUnderSanitizer;
 
 struct MeshScan {
   PointCloud cloud;

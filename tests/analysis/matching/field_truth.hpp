@@ -21,18 +21,9 @@
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/produced_part.hpp"
 #include "tests/analysis/cad_test_util.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 
 namespace springscan::analysis::testing {
-
-// Under ASan, UBSan or TSan the analysis runs 5-15x slower: repeated cases run once there (the
-// sanitizer stages look for memory errors and races, the release suite for accuracy). The TSan
-// build undefines __SANITIZE_THREAD__ (protobuf's map layout, cmake/CompilerOptions.cmake) and
-// defines SPRINGSCAN_TSAN instead.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(SPRINGSCAN_TSAN)
-constexpr bool kUnderSanitizer = true;
-#else
-constexpr bool kUnderSanitizer = false;
-#endif
 
 // The same size under the sanitizers (about 10 s a case there instead of 1): the bounds are the
 // sub-sample accuracy of a 200k-point scan, which a tenth of the points does not reach.

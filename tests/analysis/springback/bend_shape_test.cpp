@@ -12,17 +12,14 @@
 
 #include "analysis/registration/global_fit.hpp"
 #include "simulators/parts/shaped_profile.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 
 namespace springscan::analysis {
 using namespace springscan::parts;  // test and demo parts (simulators/parts)
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(SPRINGSCAN_TSAN)
-constexpr bool kUnderSanitizer = true;
-#else
-constexpr bool kUnderSanitizer = false;
-#endif
+using testing::kUnderSanitizer;
 constexpr int kTrials = kUnderSanitizer ? 1 : 4;
 
 Transform random_pose(std::mt19937& rng, double angle_rad, double shift_mm) {
