@@ -41,6 +41,21 @@ double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& norm
 IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
                                    const std::vector<Vec3>& source_normals, double max_distance_mm);
 
+/// An evenly strided sample of points with their normals picked alike (strided_sample picks by
+/// position in the vector only); `normals` empty when the source has none (no facing rule).
+struct FacingSample {
+  std::vector<Vec3> points;
+  std::vector<Vec3> normals;
+};
+
+inline FacingSample facing_sample(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                                  std::size_t count) {
+  FacingSample out{strided_sample(points, count), {}};
+  if (!points.empty() && normals.size() == points.size())
+    out.normals = strided_sample(normals, count);
+  return out;
+}
+
 /// True when every point of `points` has a normal and the rule can apply.
 inline bool has_facing_normals(const std::vector<Vec3>& points, const std::vector<Vec3>& normals) {
   return !points.empty() && normals.size() == points.size();

@@ -98,20 +98,7 @@ IcpPairSearch best_sample_pairs(const KdTree& tree, const std::vector<Vec3>& nor
   };
 }
 
-// Points and their normals (empty: no facing rule), sampled alike.
-struct ScoredPoints {
-  std::vector<Vec3> points;
-  std::vector<Vec3> normals;
-};
-
-ScoredPoints strided_points(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
-                            std::size_t count) {
-  ScoredPoints out{strided_sample(points, count), {}};
-  if (normals.size() == points.size()) out.normals = strided_sample(normals, count);
-  return out;
-}
-
-double surface_score(const ScoredPoints& sample, const Transform& T, const KdTree& model_tree,
+double surface_score(const FacingSample& sample, const Transform& T, const KdTree& model_tree,
                      const std::vector<Vec3>& model_normals, double spacing_mm, double cap_mm) {
   if (sample.points.empty() || model_tree.empty()) return 0.0;
   const double cap2 = cap_mm * cap_mm;
@@ -142,8 +129,8 @@ Expected<OrientationChoice> choose_orientation(
   const bool facing = !scan_normals.empty();
   if (facing && (scan_normals.size() != scan.size() || model_normals.size() != model_tree.size()))
     return fail("orientation: the facing rule needs one normal per scan and per model point");
-  const ScoredPoints refine_sample = strided_points(scan, scan_normals, settings.refine_points);
-  const ScoredPoints score_sample = strided_points(scan, scan_normals, settings.score_points);
+  const FacingSample refine_sample = facing_sample(scan, scan_normals, settings.refine_points);
+  const FacingSample score_sample = facing_sample(scan, scan_normals, settings.score_points);
   const double spacing = settings.spacing_allowance * model_sample_spacing(model_tree);
   const IcpPairSearch pairs =
       best_sample_pairs(model_tree, model_normals, refine_sample.normals, spacing);
@@ -166,7 +153,7 @@ Expected<OrientationChoice> choose_orientation(
   const OrientationCandidate& best = cs[choice.best];
   // The next distinct orientation that is not the same answer on a symmetric model.
   // A symmetry maps outward normals onto outward normals: the model's own follow the same rule.
-  const ScoredPoints model_sample = strided_points(
+  const FacingSample model_sample = facing_sample(
       model_tree.points(), facing ? model_normals : std::vector<Vec3>{}, kEquivalenceSamples);
   const IcpPairSearch self_pairs =
       best_sample_pairs(model_tree, model_normals, model_sample.normals, spacing);

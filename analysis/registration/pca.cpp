@@ -26,22 +26,9 @@ constexpr double kKeepsNormalCos = 0.5;
 // about itself no PCA can fix.
 constexpr double kCollinearEigenvalueRatio = 1e-10;
 
-// A sample of the source with its normals (empty: no facing rule), picked alike.
-struct SourceSample {
-  std::vector<Vec3> points;
-  std::vector<Vec3> normals;
-};
-
-SourceSample source_sample(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
-                           std::size_t count) {
-  SourceSample out{strided_sample(points, count), {}};
-  if (has_facing_normals(points, normals)) out.normals = strided_sample(normals, count);
-  return out;
-}
-
 // The robust error of a candidate: mean squared nearest distance (to a sample facing the same
 // way, on a solid), the worst share left out.
-double trimmed_score(const SourceSample& sample, const Transform& T, const KdTree& target,
+double trimmed_score(const FacingSample& sample, const Transform& T, const KdTree& target,
                      const std::vector<Vec3>& target_normals, double trimmed_fraction) {
   const bool facing = !sample.normals.empty();
   std::vector<double> d2(sample.points.size());
@@ -70,7 +57,7 @@ struct Refiner {
   const PcaAlignSettings& settings;
   IcpSettings icp_settings;
 
-  void run(const SourceSample& sample, const std::vector<std::size_t>& which, int iterations,
+  void run(const FacingSample& sample, const std::vector<std::size_t>& which, int iterations,
            std::vector<Transform>& poses, std::vector<double>& scores) {
     IcpSettings s = icp_settings;
     s.max_iterations = iterations;
@@ -232,9 +219,9 @@ Expected<PcaAlignResult> pca_align(const std::vector<Vec3>& source, const KdTree
   if (!target_frame) return target_frame.error().prepend("model ");
   const auto rotations =
       pca_rotation_candidates(*source_frame, *target_frame, settings.in_plane_steps);
-  const SourceSample sample = source_sample(source, source_normals, settings.sample_points);
-  const SourceSample screen_sample =
-      source_sample(source, source_normals, settings.screen_sample_points);
+  const FacingSample sample = facing_sample(source, source_normals, settings.sample_points);
+  const FacingSample screen_sample =
+      facing_sample(source, source_normals, settings.screen_sample_points);
   Refiner refiner{target, target_normals, settings, {}};
   refiner.icp_settings.method =
       target_normals.size() == target.size() ? IcpMethod::kPointToPlane : IcpMethod::kPointToPoint;
