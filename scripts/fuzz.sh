@@ -24,17 +24,33 @@ cmake --build "$dir" --parallel "$(nproc)" --target "${targets[@]/#/fuzz_}"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
-for t in "${targets[@]}"; do
-  corpus="$dir/corpus/$t" findings="$dir/findings/$t"
-  mkdir -p "$corpus" "$findings"
+# One target: its corpus grows in corpus/TARGET, a crash lands in findings/TARGET, the summary
+# lines go to logs/TARGET.log.
+run_one() {
+  local t=$1 corpus="$dir/corpus/$1" findings="$dir/findings/$1"
+  mkdir -p "$corpus" "$findings" "$dir/logs"
   cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/" 2>/dev/null || true
-  echo "== fuzz $t for $seconds s"
   # rss_limit: hostile sizes must never make a parser allocate past what its bytes can hold.
   "$dir/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -rss_limit_mb=2048 \
     -timeout=10 -max_len=65536 -print_final_stats=1 -artifact_prefix="$findings/" 2>&1 |
-    grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==|SUMMARY|Done|INFO: seed)' || true
-  if compgen -G "$findings/*" >/dev/null; then
-    echo "fuzz $t: findings in $findings" >&2
-    exit 1
-  fi
+    grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==|SUMMARY|Done|INFO: seed)' \
+      >"$dir/logs/$t.log" || true
+}
+# The targets are single-threaded: as many run at once as there are cores, so the stage takes
+# seconds x targets / cores.
+jobs_at_once=$(nproc)
+failed=0
+for ((i = 0; i < ${#targets[@]}; i += jobs_at_once)); do
+  batch=("${targets[@]:i:jobs_at_once}")
+  echo "== fuzz ${batch[*]} for $seconds s"
+  for t in "${batch[@]}"; do run_one "$t" & done
+  wait
+  for t in "${batch[@]}"; do
+    sed "s/^/[$t] /" "$dir/logs/$t.log"
+    if compgen -G "$dir/findings/$t/*" >/dev/null; then
+      echo "fuzz $t: findings in $dir/findings/$t" >&2
+      failed=1
+    fi
+  done
 done
+exit "$failed"

@@ -56,17 +56,33 @@ struct VtkMessages {
   }
 };
 
+// The vertices some triangle uses, in input order. Only these go to VTK: it derives its
+// geometric tolerance from the bounds of all the points it is given, used or not (below).
+std::vector<std::uint32_t> used_vertices(const TriangleMesh& mesh) {
+  std::vector<std::uint8_t> used(mesh.vertices.size(), 0);
+  for (const auto& t : mesh.triangles)
+    for (std::uint32_t v : t) used[v] = 1;
+  std::vector<std::uint32_t> out;
+  for (std::uint32_t i = 0; i < mesh.vertices.size(); ++i)
+    if (used[i]) out.push_back(i);
+  return out;
+}
+
+// The mesh as vtkPolyData: the used vertices only, each with its input index as point data.
 vtkSmartPointer<vtkPolyData> to_vtk(const TriangleMesh& mesh) {
+  const std::vector<std::uint32_t> used = used_vertices(mesh);
+  std::vector<vtkIdType> vtk_index(mesh.vertices.size(), -1);
   vtkNew<vtkDoubleArray> coords;
   coords->SetNumberOfComponents(3);
-  coords->SetNumberOfTuples(static_cast<vtkIdType>(mesh.vertices.size()));
+  coords->SetNumberOfTuples(static_cast<vtkIdType>(used.size()));
   vtkNew<vtkIdTypeArray> input_id;
   input_id->SetName(kInputIdName);
-  input_id->SetNumberOfValues(static_cast<vtkIdType>(mesh.vertices.size()));
-  for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+  input_id->SetNumberOfValues(static_cast<vtkIdType>(used.size()));
+  for (std::size_t i = 0; i < used.size(); ++i) {
     const auto id = static_cast<vtkIdType>(i);
-    coords->SetTypedTuple(id, mesh.vertices[i].data());
-    input_id->SetValue(id, id);
+    coords->SetTypedTuple(id, mesh.vertices[used[i]].data());
+    input_id->SetValue(id, used[i]);
+    vtk_index[used[i]] = id;
   }
   vtkNew<vtkIdTypeArray> offsets, connectivity;
   offsets->SetNumberOfValues(static_cast<vtkIdType>(mesh.triangles.size() + 1));
@@ -74,7 +90,7 @@ vtkSmartPointer<vtkPolyData> to_vtk(const TriangleMesh& mesh) {
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     offsets->SetValue(static_cast<vtkIdType>(t), static_cast<vtkIdType>(3 * t));
     for (std::size_t c = 0; c < 3; ++c)
-      connectivity->SetValue(static_cast<vtkIdType>(3 * t + c), mesh.triangles[t][c]);
+      connectivity->SetValue(static_cast<vtkIdType>(3 * t + c), vtk_index[mesh.triangles[t][c]]);
   }
   offsets->SetValue(static_cast<vtkIdType>(mesh.triangles.size()),
                     static_cast<vtkIdType>(3 * mesh.triangles.size()));
@@ -243,6 +259,35 @@ std::optional<Error> find_repeated_triangle(const Triangles& triangles) {
   return std::nullopt;
 }
 
+// vtkDecimatePro takes 1e-5 of its input's bounding-box diagonal as the length below which
+// geometry is degenerate, and collapses such triangles into ones that name a vertex twice; it
+// then reads vertex -1 (out of bounds, seen by fuzzing and valgrind) and crashes. That happens
+// when the box is about 1e5 times the mesh's edges, which only a stray vertex far from the
+// surface makes: a connected scan as long as 1e4 of its edges already has 1e6+ vertices. The
+// limit below leaves a factor 10 from that. Unused vertices never go to VTK (to_vtk).
+constexpr double kMaxBoxToMedianEdge = 1e4;
+
+std::optional<Error> find_stray_scale(const TriangleMesh& mesh) {
+  Vec3 lo = Vec3::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  std::vector<double> edges;
+  edges.reserve(3 * mesh.triangles.size());
+  for (const auto& t : mesh.triangles)
+    for (std::size_t c = 0; c < 3; ++c) {
+      const Vec3& a = mesh.vertices[t[c]];
+      lo = lo.cwiseMin(a);
+      hi = hi.cwiseMax(a);
+      edges.push_back((a - mesh.vertices[t[(c + 1) % 3]]).norm());
+    }
+  const auto middle = edges.begin() + static_cast<std::ptrdiff_t>(edges.size() / 2);
+  std::nth_element(edges.begin(), middle, edges.end());
+  const double median_edge = *middle, box = (hi - lo).norm();
+  if (median_edge > 0.0 && box <= kMaxBoxToMedianEdge * median_edge) return std::nullopt;
+  return fail("mesh: its triangles span " + std::to_string(box) + " mm, more than 10^4 times " +
+              "their median edge (" + std::to_string(median_edge) +
+              " mm): a stray vertex far from the surface? (the decimation cannot resolve the "
+              "triangles at that scale)");
+}
+
 std::optional<Error> find_repeated_edge(const Triangles& triangles) {
   std::vector<std::pair<std::uint64_t, std::size_t>> edges;
   edges.reserve(3 * triangles.size());
@@ -289,6 +334,7 @@ Expected<bool> check_mesh(const TriangleMesh& mesh) {
   }
   if (auto repeated = find_repeated_triangle(mesh.triangles)) return *repeated;
   if (auto repeated = find_repeated_edge(mesh.triangles)) return *repeated;
+  if (auto stray = find_stray_scale(mesh)) return *stray;
   return true;
 }
 

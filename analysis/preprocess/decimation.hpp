@@ -52,8 +52,10 @@ struct DecimationResult {
 /// Checks a mesh before decimation: at least one triangle, finite vertices within 1e9 mm,
 /// indices in range, no triangle that names a vertex twice, an oriented manifold (no directed
 /// edge in two triangles: no repeated triangle, no inconsistent winding, at most two triangles
-/// on an edge), fewer than 2^31 vertices and triangles. Errors are kInvalidInput and name the
-/// triangle or vertex and the value. O(n log n).
+/// on an edge), fewer than 2^31 vertices and triangles, and triangles spanning no more than 10^4
+/// times their median edge (a stray vertex far from the surface; vtkDecimatePro's tolerance is
+/// relative to the box and would swallow the mesh's triangles). Errors are kInvalidInput and
+/// name the triangle or vertex and the value. O(n log n).
 Expected<bool> check_mesh(const TriangleMesh& mesh);
 
 /// Decimates `mesh` (check_mesh first). Deterministic. Reentrant: the VTK objects it uses are

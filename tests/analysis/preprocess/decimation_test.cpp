@@ -227,6 +227,33 @@ TEST(Decimation, BadMeshesAreRefusedByName) {
   mesh.triangles = {{0, 1, 2}, {1, 2, 3}};  // wound against each other across edge 1-2
   expect_error(mesh, "triangles 0 and 1 both run edge 1-2 the same way");
   expect_error(TriangleMesh{}, "no triangles");
+  // A stray corner 1e6 mm out on a 1 mm grid: vtkDecimatePro's tolerance (1e-5 of the box)
+  // would exceed the grid's edges, and it read vertex -1 on such input (found by fuzzing).
+  TriangleMesh spiked = grid_mesh(5, 5, 1.0, [](double, double) { return 0.0; });
+  spiked.vertices[7].z() = 1e6;
+  expect_error(spiked, "more than 10^4 times their median edge");
+  for (Vec3& v : spiked.vertices) v.z() = 0.0;  // every edge zero length: nothing to resolve
+  for (Vec3& v : spiked.vertices) v.x() = v.y() = 0.0;
+  expect_error(spiked, "median edge (0.000000 mm)");
+}
+
+// A far point in no triangle (a stray scanner return) passes through and does not reach VTK,
+// whose tolerance would otherwise grow with it (it derives it from all the points it is given).
+TEST(Decimation, FarIsolatedVertexPassesThroughAndDoesNotChangeTheResult) {
+  const TriangleMesh plane = grid_mesh(20, 20, 1.0, [](double x, double y) {
+    return 0.01 * std::sin(x) * std::cos(y);
+  });
+  TriangleMesh with_stray = plane;
+  with_stray.vertices.emplace_back(0.0, 0.0, 4e5);
+  const auto base = decimate_mesh(plane);
+  const auto stray = decimate_mesh(with_stray);
+  ASSERT_TRUE(base.ok()) << base.message();
+  ASSERT_TRUE(stray.ok()) << stray.message();
+  EXPECT_EQ(stray->isolated_vertices, 1u);
+  EXPECT_EQ(stray->mesh.triangles, base->mesh.triangles);
+  ASSERT_EQ(stray->kept.size(), base->kept.size() + 1);
+  EXPECT_EQ(stray->kept.back(), plane.vertices.size());
+  EXPECT_EQ(stray->mesh.vertices.back(), with_stray.vertices.back());
 }
 
 TEST(Decimation, SettingsOutOfRangeNameTheField) {
