@@ -5,6 +5,7 @@
 #include <sstream>
 #include <string>
 
+#include "analysis/cad/datum_features.hpp"
 #include "analysis/cad/import.hpp"
 #include "analysis/cad/segmentation.hpp"
 #include "cli/cli_common.hpp"
@@ -35,9 +36,32 @@ std::string quoted(const std::string& text) {
   return out + "\"";
 }
 
+// The datum candidates (docs/alignment.md "Datum alignment"): what a datum list is written from.
+std::string candidates_json(const analysis::DatumCandidates& c) {
+  std::ostringstream o;
+  o.precision(10);
+  o << "{\n    \"pads\": [";
+  for (std::size_t i = 0; i < c.pads.size(); ++i) {
+    const auto& p = c.pads[i];
+    o << (i ? "," : "") << "\n      {\"flange\": " << p.flange_id << ", \"point\": " << vec(p.point)
+      << ", \"normal\": " << vec(p.normal) << ", \"area_mm2\": " << p.area_mm2
+      << ", \"thickness_mm\": " << p.thickness_mm << "}";
+  }
+  o << "\n    ],\n    \"holes\": [";
+  for (std::size_t i = 0; i < c.holes.size(); ++i) {
+    const auto& h = c.holes[i];
+    o << (i ? "," : "") << "\n      {\"faces\": " << ids(h.face_ids)
+      << ", \"flange\": " << h.flange_id << ", \"centre\": " << vec(h.centre)
+      << ", \"axis\": " << vec(h.axis) << ", \"diameter_mm\": " << h.diameter_mm
+      << ", \"thickness_mm\": " << h.thickness_mm << "}";
+  }
+  o << "\n    ]\n  }";
+  return o.str();
+}
+
 std::string as_json(const analysis::CadLoadReport& r,
                     const std::vector<analysis::CadFaceInfo>& faces,
-                    const analysis::PartSegmentation& s) {
+                    const analysis::PartSegmentation& s, const analysis::DatumCandidates& c) {
   std::ostringstream o;
   o.precision(10);
   const auto size = r.bbox_max - r.bbox_min;
@@ -72,13 +96,14 @@ std::string as_json(const analysis::CadLoadReport& r,
       << ", \"nominal_angle_deg\": " << b.nominal_angle_deg << ", \"flange_a\": " << b.flange_a
       << ", \"flange_b\": " << b.flange_b << "}";
   }
-  o << "\n  ],\n  \"other_faces\": " << ids(s.other_faces) << "\n}\n";
+  o << "\n  ],\n  \"other_faces\": " << ids(s.other_faces)
+    << ",\n  \"datum_candidates\": " << candidates_json(c) << "\n}\n";
   return o.str();
 }
 
 std::string as_text(const analysis::CadLoadReport& r,
                     const std::vector<analysis::CadFaceInfo>& faces,
-                    const analysis::PartSegmentation& s) {
+                    const analysis::PartSegmentation& s, const analysis::DatumCandidates& c) {
   std::ostringstream o;
   o.precision(6);
   o << r.file << "\n  " << analysis::summary(r) << "\n\nfaces (" << faces.size() << "):\n";
@@ -98,15 +123,25 @@ std::string as_text(const analysis::CadLoadReport& r,
       << vec(b.axis_point) << " + t " << vec(b.axis_direction) << "  faces " << ids(b.face_ids)
       << "\n";
   o << "\nother faces: " << ids(s.other_faces) << "\n";
+  o << "\ndatum candidates: pads (" << c.pads.size() << ")\n";
+  for (const auto& p : c.pads)
+    o << "  flange " << p.flange_id << "  area " << p.area_mm2 << " mm2  point " << vec(p.point)
+      << "  normal " << vec(p.normal) << "\n";
+  o << "datum candidates: round holes (" << c.holes.size() << ")\n";
+  for (const auto& h : c.holes)
+    o << "  diameter " << h.diameter_mm << " mm  centre " << vec(h.centre) << "  axis "
+      << vec(h.axis) << "  flange " << h.flange_id << "  faces " << ids(h.face_ids) << "\n";
   return o.str();
 }
 
 }  // namespace
 
 int model_main(int argc, char** argv) {
-  ArgParser args(kName, "springscan model PART.igs|PART.step|PART.brep [--json]",
-                 "Loads a CAD file as the station would (mm, sewn, healed) and prints its faces, "
-                 "flanges and bends (axis, inner radius, nominal angle, the flanges joined).");
+  ArgParser args(
+      kName, "springscan model PART.igs|PART.step|PART.brep [--json]",
+      "Loads a CAD file as the station would (mm, sewn, healed) and prints its faces, "
+      "flanges and bends (axis, inner radius, nominal angle, the flanges joined), and the "
+      "candidate datum features (planar pads by area, round holes).");
   args.add_switch("json", "print JSON instead of text");
   args.add_option("linear-deflection", "MM", "tessellation chord tolerance (default 0.05)");
   Logger log;
@@ -126,8 +161,9 @@ int model_main(int argc, char** argv) {
   if (!shape) return fail_with(kName, shape.message(), kExitUsage);
   const auto faces = analysis::describe_faces(*shape);
   const auto segmentation = analysis::segment_cad(*shape);
-  std::cout << (args.has("json") ? as_json(shape->report(), faces, segmentation)
-                                 : as_text(shape->report(), faces, segmentation));
+  const auto candidates = analysis::datum_candidates(*shape, faces, segmentation);
+  std::cout << (args.has("json") ? as_json(shape->report(), faces, segmentation, candidates)
+                                 : as_text(shape->report(), faces, segmentation, candidates));
   return kExitOk;
 }
 

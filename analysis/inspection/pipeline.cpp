@@ -13,6 +13,7 @@
 #include "analysis/matching/compensation.hpp"
 #include "analysis/matching/deformation_field.hpp"
 #include "analysis/matching/field_refinement.hpp"
+#include "analysis/messages/alignment_proto.hpp"
 #include "analysis/messages/cad_model_proto.hpp"
 #include "analysis/messages/fit_proto.hpp"
 #include "analysis/messages/matching_proto.hpp"
@@ -21,6 +22,7 @@
 #include "analysis/messages/verdict_proto.hpp"
 #include "analysis/preprocess/normals.hpp"
 #include "analysis/preprocess/reduction.hpp"
+#include "analysis/registration/datum.hpp"
 #include "analysis/registration/global_fit.hpp"
 
 namespace springscan::analysis {
@@ -37,6 +39,7 @@ struct PipelineSettings {
   NormalSettings normals;
   ReductionSettings reduction;
   GlobalFitSettings global_fit;
+  DatumAlignmentSettings alignment;
   DeviationSettings deviation;
   SpringbackSettings springback;
   DeformationFieldSettings field;
@@ -51,6 +54,7 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto normals = from_proto(m.normals());
   auto reduction = from_proto(m.reduction());
   auto fit = from_proto(m.registration());
+  auto alignment = from_proto(m.alignment());
   auto springback = from_proto(m.springback());
   auto field = from_proto(m.deformation_field());
   auto compensation = from_proto(m.compensation());
@@ -59,20 +63,22 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   for (const std::string* error :
        {threads ? nullptr : &threads.message(), normals ? nullptr : &normals.message(),
         reduction ? nullptr : &reduction.message(), fit ? nullptr : &fit.message(),
-        springback ? nullptr : &springback.message(), field ? nullptr : &field.message(),
-        compensation ? nullptr : &compensation.message(), verdict ? nullptr : &verdict.message()})
+        alignment ? nullptr : &alignment.message(), springback ? nullptr : &springback.message(),
+        field ? nullptr : &field.message(), compensation ? nullptr : &compensation.message(),
+        verdict ? nullptr : &verdict.message()})
     if (error) return fail(*error);
   s.threads = *threads;
   s.normals = *normals;
   s.reduction = *reduction;
   s.global_fit = *fit;
+  s.alignment = *alignment;
   s.springback = *springback;
   s.field = *field;
   s.compensation = *compensation;
   s.verdict = *verdict;
   s.springback.threads = s.field.refinement.threads = s.threads;
   s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
-  s.deviation.threads = s.reduction.curvature.threads = s.threads;
+  s.deviation.threads = s.reduction.curvature.threads = s.alignment.threads = s.threads;
   return s;
 }
 
@@ -83,6 +89,7 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   to_proto(s.normals, out->mutable_normals());
   to_proto(s.reduction, out->mutable_reduction());
   to_proto(s.global_fit, out->mutable_registration());
+  to_proto(s.alignment, out->mutable_alignment());
   // deviation.tolerance_mm is the older spelling of verdict.tolerance_mm: both show the value
   // in force, so a reader of either sees the tolerance the part was judged by.
   out->mutable_deviation()->set_tolerance_mm(s.verdict.tolerance_mm);
@@ -244,6 +251,24 @@ Expected<std::vector<Vec3>> fit_point_normals(const PartModel& model, const Poin
   return std::move(estimated->normals);
 }
 
+// Stage 4b: the result frame. With datums (registration/datum.hpp), the datum frame solved from
+// the datum features measured in the scan, the best fit kept beside it; without, the best fit.
+// A datum that cannot be measured fails the analysis (named), never falls back.
+Expected<Transform> result_frame(const PointCloud& scan, const Transform& T_best,
+                                 const PartModel& model, const DatumAlignmentSettings& settings,
+                                 v1::Alignment* out) {
+  if (settings.datums.empty()) {
+    alignment_to_proto(T_best, nullptr, out);
+    return T_best;
+  }
+  const bool normals = scan.normals.size() == scan.size();
+  auto datum = align_to_datums(scan.points, normals ? scan.normals : std::vector<Vec3>{}, T_best,
+                               model, settings);
+  if (!datum) return datum.error();
+  alignment_to_proto(T_best, &*datum, out);
+  return datum->T_cad_scan;
+}
+
 // The report's head: schema, the settings in force, what went in.
 void start_report(const PipelineSettings& config, const v1::AnalysisSettings& settings,
                   const PartModel& model, const PointCloud& scan, v1::InspectionReport& report) {
@@ -297,11 +322,14 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   for (const auto& warning : fit->warnings) report.add_warnings(warning);
   for (const FreeDirection& d : pinned->free_directions)
     if (!d.pinned) report.add_warnings("global fit: a direction is left free, " + d.rule);
+  const auto T_cad_scan =
+      result_frame(scan, fit->T_cad_scan, model, config->alignment, report.mutable_alignment());
+  if (!T_cad_scan) return T_cad_scan.error();
   timings.set_global_fit(ms_since(t));
 
   t = Clock::now();
   // 5. Deviation: signed distance of every scan point to the model (DESIGN.md stage 5).
-  PointCloud scan_in_cad = transformed(scan, fit->T_cad_scan);
+  PointCloud scan_in_cad = transformed(scan, *T_cad_scan);
   auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
   if (!deviation) return deviation.error();
   // deviation.ply's colour scale: the setting, else the surface tolerance it is judged by.
@@ -325,7 +353,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 8-9. Deformation field by exact matching (paper §5) and compensation vectors.
-  auto coverage = add_deformation(model, model_tree, *reduced, fit->T_cad_scan, out.deviation_cloud,
+  auto coverage = add_deformation(model, model_tree, *reduced, *T_cad_scan, out.deviation_cloud,
                                   springback ? &*springback : nullptr, *config, out);
   if (!coverage) return coverage.error();
   timings.set_deformation(ms_since(t));

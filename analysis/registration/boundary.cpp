@@ -99,24 +99,6 @@ std::vector<Vec3> free_translations(const std::vector<Vec3>& scan_cad, const KdT
   return out;
 }
 
-// The end of evenly spread values at the high side (band estimate, boundary.hpp step 1); nothing
-// when the band holds too few. `values` is reordered.
-std::optional<double> high_end(std::vector<double>& values, double band_mm, std::size_t min_points,
-                               std::size_t skip_outermost) {
-  if (values.size() < min_points + skip_outermost) return std::nullopt;
-  // The outermost value after the `skip_outermost` largest (stray points on the surface's
-  // extension beyond the end).
-  std::nth_element(values.begin(), values.begin() + static_cast<long>(skip_outermost), values.end(),
-                   std::greater<>());
-  const double e0 = values[skip_outermost];
-  double sum = 0.0;
-  std::size_t n = 0;
-  for (double v : values)
-    if (v >= e0 - band_mm && v <= e0) sum += v, ++n;
-  if (n < min_points) return std::nullopt;
-  return 2.0 * (sum / static_cast<double>(n)) - e0 + band_mm;
-}
-
 struct Extent {
   std::optional<double> low, high;
   bool located() const { return low && high; }
@@ -218,6 +200,22 @@ FreeDirection pin_direction(const std::vector<Vec3>& scan, Transform& T, const K
 }
 
 }  // namespace
+
+std::optional<double> high_end(std::vector<double>& values, double band_mm, std::size_t min_points,
+                               std::size_t skip_outermost) {
+  if (values.size() < min_points + skip_outermost) return std::nullopt;
+  // The outermost value after the `skip_outermost` largest (stray points on the surface's
+  // extension beyond the end).
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(skip_outermost), values.end(),
+                   std::greater<>());
+  const double e0 = values[skip_outermost];
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (double v : values)
+    if (v >= e0 - band_mm && v <= e0) sum += v, ++n;
+  if (n < min_points) return std::nullopt;
+  return 2.0 * (sum / static_cast<double>(n)) - e0 + band_mm;
+}
 
 Expected<BoundaryResult> pin_to_boundary(const std::vector<Vec3>& scan, const Transform& T_cad_scan,
                                          const PartModel& model, const KdTree& model_tree,

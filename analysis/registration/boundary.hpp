@@ -21,6 +21,7 @@
 // Thread safety: a pure function.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,13 @@ struct BoundaryResult {
   Transform T_cad_scan = Transform::Identity();  ///< the fit with the pinned shifts applied
   std::vector<FreeDirection> free_directions;
 };
+
+/// The end of evenly spread `values` at their high side by the band estimate (step 1 above,
+/// band `band_mm`), after leaving out the `skip_outermost` largest (stray points beyond the
+/// end); nothing when the band holds fewer than `min_points`. `values` is reordered. Also the
+/// datum alignment's edge points (registration/datum.hpp).
+std::optional<double> high_end(std::vector<double>& values, double band_mm, std::size_t min_points,
+                               std::size_t skip_outermost);
 
 /// Pins the free translations of the fit `T_cad_scan` by the part's ends (see above). `scan` in
 /// the scan frame; `model_tree` holds model.samples.points. Errors: empty scan or model,

@@ -90,6 +90,8 @@ struct FieldRun {
   std::vector<Vec3> control;            ///< control points (CAD), by model index
   std::vector<parts::BendTruth> bends;  ///< the produced part's bends (springback applied)
   Transform T_result_part = Transform::Identity();  ///< the report's frame from the part's
+  std::vector<Vec3> scan_cad_points;  ///< per scan point: the CAD point it is the image of
+  std::vector<double> deviation;      ///< per scan point: its signed deviation in the report
 };
 
 inline Transform from_row_major(const google::protobuf::RepeatedField<double>& m) {
@@ -140,7 +142,11 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
   EXPECT_TRUE(outcome) << outcome.message();
   if (!outcome) return run;
   run.report = std::move(outcome->report);
-  const Transform T_result_part = from_row_major(run.report.global_fit().transform()) * sc.pose;
+  run.deviation = std::move(outcome->deviation_cloud.scalars);
+  run.scan_cad_points = scan.cad_points;
+  // The result frame: the datums' when the part has them, else the best fit (both the same
+  // then).
+  const Transform T_result_part = from_row_major(run.report.alignment().transform()) * sc.pose;
   run.T_result_part = T_result_part;
   run.bends = part->bends;
 

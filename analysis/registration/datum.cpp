@@ -1,0 +1,306 @@
+// Datum (RPS) alignment: the settings' checks, the gathering of each datum's scan points, the
+// datum frame solve and the measure-and-solve passes (datum.hpp).
+#include "analysis/registration/datum.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "analysis/core/parallel.hpp"
+#include "analysis/registration/datum_internal.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+using datum_detail::FeatureFit;
+using datum_detail::FeaturePoints;
+using datum_detail::fixed_directions;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+constexpr double kRankRatio = 1e-8;     // a direction's information below this x the largest
+constexpr double kConvergedMm = 1e-4;   // a pass moving the frame less than this ends them
+constexpr double kOnPlaneMm = 0.05;     // a datum point this close to a flange's skin is on it
+constexpr double kParallelDot = 0.999;  // a flange's normal this close to the datum's
+
+std::optional<Error> bad(std::string_view context, const Datum& d, const std::string& what) {
+  return fail(ErrorCode::kInvalidSettings,
+              std::string(context) + "datum '" + d.name + "' (" + to_string(d.kind) + "): " + what);
+}
+
+std::optional<Error> check_datum(const Datum& d, std::string_view context) {
+  if (d.name.empty()) return bad(context, d, "needs a name");
+  if (!d.point.allFinite() || !d.normal.allFinite() || !d.direction.allFinite())
+    return bad(context, d, "non-finite point, normal or direction");
+  if (std::abs(d.normal.norm() - 1.0) > 1e-6) return bad(context, d, "normal must be unit");
+  const bool needs_direction = d.kind == DatumKind::kSlot || d.kind == DatumKind::kEdge;
+  if (needs_direction && d.direction.isZero()) return bad(context, d, "needs a direction");
+  if (!d.direction.isZero() &&
+      (std::abs(d.direction.norm() - 1.0) > 1e-6 || std::abs(d.direction.dot(d.normal)) > 1e-6))
+    return bad(context, d, "direction must be unit and across the normal");
+  if (d.kind == DatumKind::kPad && !d.direction.isZero())
+    return bad(context, d, "a pad fixes its normal: no direction");
+  if ((d.kind == DatumKind::kPad || d.kind == DatumKind::kEdge) && !(d.radius_mm > 0.0))
+    return bad(context, d, "radius_mm must be > 0");
+  if ((d.kind == DatumKind::kHole || d.kind == DatumKind::kSlot) && !(d.diameter_mm > 0.0))
+    return bad(context, d, "diameter_mm must be > 0");
+  if (d.kind == DatumKind::kSlot && !(d.length_mm > d.diameter_mm))
+    return bad(context, d, "length_mm must exceed the width (diameter_mm)");
+  if (!(d.weight > 0.0) || !std::isfinite(d.weight)) return bad(context, d, "weight must be > 0");
+  if (!(d.thickness_mm >= 0.0)) return bad(context, d, "thickness_mm must be >= 0");
+  return std::nullopt;
+}
+
+// The weighted normal matrix of the datums' constraint rows [(m - o) x d, d] at the nominal
+// points, rotations scaled by the datums' spread so that the eigenvalues compare.
+struct Information {
+  Mat6 matrix = Mat6::Zero();
+  Vec3 origin = Vec3::Zero();
+  double length = 1.0;
+};
+
+Information information(const std::vector<Datum>& datums) {
+  Information info;
+  double weight = 0.0;
+  for (const Datum& d : datums) info.origin += d.weight * d.point, weight += d.weight;
+  info.origin /= weight;
+  double spread = 0.0;
+  for (const Datum& d : datums) spread += d.weight * (d.point - info.origin).squaredNorm();
+  info.length = std::max(std::sqrt(spread / weight), 1.0);
+  for (const Datum& d : datums)
+    for (const Vec3& dir : fixed_directions(d)) {
+      Vec6 row;
+      row << (d.point - info.origin).cross(dir) / info.length, dir;
+      info.matrix += d.weight * row * row.transpose();
+    }
+  return info;
+}
+
+// "(0 0 1)": a unit direction to three digits, its largest component positive.
+std::string direction_text(Vec3 u) {
+  u.normalize();
+  Eigen::Index largest;
+  u.cwiseAbs().maxCoeff(&largest);
+  if (u(largest) < 0.0) u = -u;
+  std::ostringstream o;
+  o.precision(3);
+  o << "(";
+  for (int k = 0; k < 3; ++k) o << (k ? " " : "") << (std::abs(u(k)) < 5e-4 ? 0.0 : u(k));
+  return o.str() + ")";
+}
+
+std::string describe_free(const Vec6& v) {
+  const Vec3 rot = v.head<3>(), shift = v.tail<3>();
+  if (rot.norm() >= shift.norm()) return "the rotation about " + direction_text(rot);
+  return "the translation along " + direction_text(shift);
+}
+
+// Which skin's flange a datum lies on: its thickness is the wall's height.
+double flange_thickness(const Datum& d, const PartModel& model) {
+  for (const Flange& f : model.segmentation.flanges) {
+    if (std::abs(f.normal.dot(d.normal)) < kParallelDot) continue;
+    const double h = (d.point - f.point).dot(f.normal);
+    if (std::abs(h) <= kOnPlaneMm || std::abs(std::abs(h) - f.thickness_mm) <= kOnPlaneMm)
+      return f.thickness_mm;
+  }
+  return 0.0;
+}
+
+// Per datum, the scan points (scan frame, with their normals) within `reach` of its point in
+// the frame `T`: one pass over the scan (each datum's sphere carried into the scan frame)
+// before the first round, copied once so that the rounds read them in order (an index into
+// the scan per point and round cost a cache miss each: 50 ms on 1M points). Later rounds pick
+// their points from these (the frame moves less than the search distance).
+std::vector<FeaturePoints> within_reach(const std::vector<Vec3>& scan,
+                                        const std::vector<Vec3>& normals, const Transform& T,
+                                        const std::vector<Datum>& datums,
+                                        const std::vector<double>& reach, int threads) {
+  const Transform T_inv = T.inverse();
+  std::vector<Vec3> centres;
+  std::vector<double> r2;
+  for (std::size_t k = 0; k < datums.size(); ++k) {
+    centres.push_back(T_inv * datums[k].point);
+    r2.push_back(reach[k] * reach[k]);
+  }
+  std::vector<std::vector<std::vector<std::uint32_t>>> blocks(block_count(scan.size()));
+  parallel_blocks(scan.size(), threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    auto& mine = blocks[b];
+    mine.resize(datums.size());
+    for (std::size_t i = begin; i < end; ++i)
+      for (std::size_t k = 0; k < datums.size(); ++k)
+        if ((scan[i] - centres[k]).squaredNorm() <= r2[k])
+          mine[k].push_back(static_cast<std::uint32_t>(i));
+  });
+  std::vector<FeaturePoints> out(datums.size());
+  for (const auto& block : blocks)
+    for (std::size_t k = 0; k < block.size(); ++k)
+      for (std::uint32_t i : block[k]) {
+        out[k].points.push_back(scan[i]);
+        if (!normals.empty()) out[k].normals.push_back(normals[i]);
+      }
+  return out;
+}
+
+// The datum's points of `candidates` (scan frame) in the CAD frame of `T` within `radius` of
+// its point.
+FeaturePoints near_points(const FeaturePoints& candidates, const Transform& T, const Datum& datum,
+                          double radius) {
+  FeaturePoints near;
+  for (std::size_t i = 0; i < candidates.points.size(); ++i) {
+    const Vec3 q = T * candidates.points[i];
+    if ((q - datum.point).squaredNorm() > radius * radius) continue;
+    near.points.push_back(q);
+    if (!candidates.normals.empty()) near.normals.push_back(T.linear() * candidates.normals[i]);
+  }
+  return near;
+}
+
+struct Constraint {
+  Vec3 measured, nominal, direction;
+  double weight;
+};
+
+// The rigid motion that takes every measured point onto its nominal along its direction,
+// weighted least squares: Gauss-Newton with exact rotations about the datums' centre.
+Transform solve_frame(std::vector<Constraint> c, const Vec3& origin) {
+  Transform T = Transform::Identity();
+  for (int it = 0; it < 10; ++it) {
+    Mat6 A = Mat6::Zero();
+    Vec6 b = Vec6::Zero();
+    for (const Constraint& k : c) {
+      Vec6 row;
+      row << (k.measured - origin).cross(k.direction), k.direction;
+      A += k.weight * row * row.transpose();
+      b -= k.weight * row * k.direction.dot(k.measured - k.nominal);
+    }
+    const Vec6 x = A.ldlt().solve(b);
+    const Vec3 w = x.head<3>();
+    Transform step = Transform::Identity();
+    if (w.norm() > 0.0) step.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
+    step.translation() = origin - step.linear() * origin + x.tail<3>();
+    for (Constraint& k : c) k.measured = step * k.measured;
+    T = step * T;
+    if (x.norm() < 1e-13) break;
+  }
+  return T;
+}
+
+Vec3 residual_of(const Datum& d, const Vec3& measured) {
+  Vec3 r = Vec3::Zero();
+  for (const Vec3& dir : fixed_directions(d)) r += dir.dot(measured - d.point) * dir;
+  return r;
+}
+
+Error not_measurable(const Datum& d, const FeatureFit& fit) {
+  return fail(ErrorCode::kAnalysisFailed, "alignment: datum '" + d.name + "' (" +
+                                              to_string(d.kind) +
+                                              ") cannot be measured: " + fit.failure);
+}
+
+}  // namespace
+
+std::string to_string(DatumKind kind) {
+  switch (kind) {
+    case DatumKind::kPad:
+      return "pad";
+    case DatumKind::kHole:
+      return "hole";
+    case DatumKind::kSlot:
+      return "slot";
+    case DatumKind::kEdge:
+      return "edge";
+  }
+  return "?";
+}
+
+std::optional<Error> validate(const DatumAlignmentSettings& s, std::string_view context) {
+  const auto range = [&](const std::string& what) {
+    return fail(ErrorCode::kInvalidSettings, std::string(context) + what);
+  };
+  if (!(s.search_mm > 0.0) || !(s.band_mm > 0.0)) return range("search_mm and band_mm must be > 0");
+  if (s.min_points < 3) return range("min_points must be >= 3");
+  if (!(s.outlier_sigmas >= 1.0)) return range("outlier_sigmas must be >= 1");
+  if (s.min_hole_sectors < 3 || s.min_hole_sectors > 12)
+    return range("min_hole_sectors must be 3..12");
+  if (s.max_passes < 1) return range("max_passes must be >= 1");
+  if (s.datums.empty()) return std::nullopt;
+  std::set<std::string> names;
+  for (const Datum& d : s.datums) {
+    if (auto e = check_datum(d, context)) return e;
+    if (!names.insert(d.name).second) return bad(context, d, "the name is used twice");
+  }
+  const Information info = information(s.datums);
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(info.matrix);
+  if (eig.eigenvalues()(0) <= kRankRatio * eig.eigenvalues()(5))
+    return range("the datums leave " + describe_free(eig.eigenvectors().col(0)) +
+                 " free: a 3-2-1 set needs three pads, a hole and a second hole, slot or edge");
+  return std::nullopt;
+}
+
+Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
+                                               const std::vector<Vec3>& scan_normals,
+                                               const Transform& T_cad_scan_best,
+                                               const PartModel& model,
+                                               const DatumAlignmentSettings& settings) {
+  if (auto e = validate(settings)) return *e;
+  if (!scan_normals.empty() && scan_normals.size() != scan.size())
+    return fail("alignment: the scan's normals do not match its points");
+  std::vector<Datum> datums = settings.datums;
+  for (Datum& d : datums) {
+    if (d.thickness_mm == 0.0) d.thickness_mm = flange_thickness(d, model);
+    if ((d.kind == DatumKind::kHole || d.kind == DatumKind::kSlot) && d.thickness_mm <= 0.0)
+      return fail(ErrorCode::kAnalysisFailed,
+                  "alignment: datum '" + d.name + "' (" + to_string(d.kind) +
+                      "): no wall height (no solid flange at its point; set thickness_mm)");
+  }
+  const Vec3 origin = information(datums).origin;
+  std::vector<double> reach;
+  for (const Datum& d : datums)
+    reach.push_back(datum_detail::gather_radius(d, settings.search_mm) + settings.search_mm);
+  const auto candidates =
+      within_reach(scan, scan_normals, T_cad_scan_best, datums, reach, settings.threads);
+  DatumAlignmentResult out;
+  out.T_cad_scan = T_cad_scan_best;
+  std::vector<FeatureFit> fits;
+  for (int pass = 0; pass < settings.max_passes; ++pass) {
+    const double band = pass == 0 ? settings.search_mm : settings.band_mm;
+    fits.clear();
+    std::vector<Constraint> constraints;
+    for (std::size_t k = 0; k < datums.size(); ++k) {
+      const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
+                                             datum_detail::gather_radius(datums[k], band));
+      fits.push_back(datum_detail::measure_feature(datums[k], near, band, settings));
+      if (!fits.back().measured) return not_measurable(datums[k], fits.back());
+      for (const Vec3& dir : fixed_directions(datums[k]))
+        constraints.push_back({fits.back().point, datums[k].point, dir, datums[k].weight});
+    }
+    const Transform step = solve_frame(std::move(constraints), origin);
+    out.T_cad_scan = step * out.T_cad_scan;
+    for (FeatureFit& f : fits) f.point = step * f.point, f.normal = step.linear() * f.normal;
+    out.passes = pass + 1;
+    const double moved = (step * origin - origin).norm() +
+                         Eigen::AngleAxisd(step.linear()).angle() * information(datums).length;
+    if (pass > 0 && moved < kConvergedMm) break;
+  }
+  out.T_datum_best = out.T_cad_scan * T_cad_scan_best.inverse();
+  const Transform back = out.T_datum_best.inverse();
+  for (std::size_t k = 0; k < datums.size(); ++k) {
+    DatumResult r;
+    r.datum = datums[k];
+    r.measured = fits[k].point;
+    r.measured_normal = fits[k].normal;
+    r.measured_diameter_mm = fits[k].diameter_mm;
+    r.residual = residual_of(datums[k], fits[k].point);
+    r.best_fit_residual = residual_of(datums[k], back * fits[k].point);
+    r.constraints = static_cast<int>(fixed_directions(datums[k]).size());
+    r.points = fits[k].points;
+    r.fit_rms_mm = fits[k].rms_mm;
+    out.datums.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace springscan::analysis
