@@ -256,7 +256,7 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
                   "alignment: datum '" + d.name + "' (" + to_string(d.kind) +
                       "): no wall height (no solid flange at its point; set thickness_mm)");
   }
-  const Vec3 origin = information(datums).origin;
+  const Information info = information(datums);
   std::vector<double> reach;
   for (const Datum& d : datums)
     reach.push_back(datum_detail::gather_radius(d, settings.search_mm) + settings.search_mm);
@@ -277,12 +277,12 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
       for (const Vec3& dir : fixed_directions(datums[k]))
         constraints.push_back({fits.back().point, datums[k].point, dir, datums[k].weight});
     }
-    const Transform step = solve_frame(std::move(constraints), origin);
+    const Transform step = solve_frame(std::move(constraints), info.origin);
     out.T_cad_scan = step * out.T_cad_scan;
     for (FeatureFit& f : fits) f.point = step * f.point, f.normal = step.linear() * f.normal;
     out.passes = pass + 1;
-    const double moved = (step * origin - origin).norm() +
-                         Eigen::AngleAxisd(step.linear()).angle() * information(datums).length;
+    const double moved = (step * info.origin - info.origin).norm() +
+                         Eigen::AngleAxisd(step.linear()).angle() * info.length;
     if (pass > 0 && moved < kConvergedMm) break;
   }
   out.T_datum_best = out.T_cad_scan * T_cad_scan_best.inverse();

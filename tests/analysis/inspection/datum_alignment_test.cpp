@@ -237,8 +237,8 @@ TEST_P(DatumPart, UnmeasurableDatumFailsTheAnalysis) {
 
 // Under the sanitizers (5-15x slower) one part: they look for memory errors and races.
 std::vector<std::string> datum_parts() {
-  std::vector<std::string> parts = {"openamr-MMP.00.00.00.001_Front_panel.step",
-                                    "openamr-MMP.03.00.00.003_Motor_bracket.step"};
+  std::vector<std::string> parts = {"openamr-MMP.03.00.00.003_Motor_bracket.step",
+                                    "openamr-MMP.00.00.00.001_Front_panel.step"};
   if (testing::kUnderSanitizer) parts.resize(1);
   return parts;
 }

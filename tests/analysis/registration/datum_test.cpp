@@ -1,11 +1,12 @@
-// Datum alignment on a constructed plate: a 100 x 60 mm sheet, 2 mm thick, two round holes, its
-// top skin and hole walls sampled exactly (sigma 0.02 mm noise), placed at a known pose in the
-// scanner frame and given to align_to_datums with a best fit that is off by a known error. The
-// datum frame must come back as the pose, whatever the best fit's error.
+// Datum alignment on a constructed plate: a 100 x 60 mm sheet, 2 mm thick, two round holes and
+// a slot, its top skin and walls sampled exactly (sigma 0.02 mm noise), placed at a known pose
+// in the scanner frame and given to align_to_datums with a best fit that is off by a known
+// error. The datum frame must come back as the pose, whatever the best fit's error.
 #include "analysis/registration/datum.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +22,16 @@ namespace {
 constexpr double kThickness = 2.0;
 const Vec3 kHoleA(20.0, 30.0, 0.0), kHoleB(80.0, 30.0, 0.0);
 constexpr double kDiameterA = 8.0, kDiameterB = 6.0;
+// A slot along x at (50, 30): 6 mm wide, 14 mm long (straight walls 8 mm).
+const Vec3 kSlot(50.0, 30.0, 0.0);
+constexpr double kSlotWidth = 6.0, kSlotLength = 14.0;
+
+// Distance of q (z = 0) from the slot's centre line segment, minus its half width (< 0 inside).
+double slot_distance(const Vec3& q) {
+  const double half = 0.5 * (kSlotLength - kSlotWidth);
+  const double x = std::clamp(q.x(), kSlot.x() - half, kSlot.x() + half);
+  return (q - Vec3(x, kSlot.y(), 0.0)).norm() - 0.5 * kSlotWidth;
+}
 
 struct Plate {
   std::vector<Vec3> points, normals;  // CAD frame
@@ -36,6 +47,7 @@ Plate plate(bool wall_b = true, int skin_points = 66'000) {
   for (int i = 0; i < skin_points; ++i) {
     const Vec3 q(ux(rng), uy(rng), 0.0);
     if ((q - kHoleA).norm() < kDiameterA / 2 || (q - kHoleB).norm() < kDiameterB / 2) continue;
+    if (slot_distance(q) < 0.0) continue;
     p.points.push_back(q);
     p.normals.push_back(Vec3::UnitZ());
   }
@@ -51,6 +63,22 @@ Plate plate(bool wall_b = true, int skin_points = 66'000) {
         p.normals.push_back(-radial);
       }
   }
+  // The slot's two straight walls and round ends, every 0.1 mm along its outline.
+  const double half = 0.5 * (kSlotLength - kSlotWidth), r = 0.5 * kSlotWidth;
+  for (double s = -half; s <= half; s += 0.1)
+    for (double side : {-1.0, 1.0})
+      for (double z = -0.1; z > -kThickness; z -= 0.2) {
+        p.points.push_back(kSlot + Vec3(s, side * r, z));
+        p.normals.push_back(Vec3(0.0, -side, 0.0));
+      }
+  for (double a = -90.0; a <= 90.0; a += 2.0)
+    for (double end : {-1.0, 1.0})
+      for (double z = -0.1; z > -kThickness; z -= 0.2) {
+        const double t = a * std::numbers::pi / 180;
+        const Vec3 radial(end * std::cos(t), std::sin(t), 0.0);
+        p.points.push_back(kSlot + Vec3(end * half, 0, z) + r * radial);
+        p.normals.push_back(-radial);
+      }
   return p;
 }
 
@@ -197,6 +225,29 @@ TEST(DatumAlignment, EdgePointFixesTheRotation) {
   EXPECT_LE(rot, 0.1);
   EXPECT_LE(shift, 0.1);
   EXPECT_NEAR(r->datums[4].residual.norm(), 0.0, 1e-6);
+}
+
+// A slot as the 1 of 3-2-1: its two straight walls fix the direction across it (y), the turn
+// about z with hole A 30 mm away.
+TEST(DatumAlignment, SlotFixesTheDirectionAcrossIt) {
+  const Case c = scan_case(plate(), 9);
+  DatumAlignmentSettings s = three_two_one();
+  Datum slot;
+  slot.name = "C";
+  slot.kind = DatumKind::kSlot;
+  slot.point = kSlot;
+  slot.direction = Vec3::UnitY();
+  slot.diameter_mm = kSlotWidth;
+  slot.length_mm = kSlotLength;
+  s.datums.back() = slot;
+  auto r = align_to_datums(c.scan, c.normals, c.best, plate_model(), s);
+  ASSERT_TRUE(r) << r.message();
+  const auto [rot, shift] = frame_error(r->T_cad_scan, c.pose);
+  std::printf("slot: %.5f deg %.5f mm, width %.4f mm\n", rot, shift,
+              r->datums[4].measured_diameter_mm);
+  EXPECT_LE(rot, 0.005);
+  EXPECT_LE(shift, 0.01);
+  EXPECT_NEAR(r->datums[4].measured_diameter_mm, kSlotWidth, 0.005);
 }
 
 // The stage's cost on a 1M-point scan (docs/alignment.md): one pass over the scan per round.
