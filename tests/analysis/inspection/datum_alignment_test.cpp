@@ -109,7 +109,7 @@ v1::AnalysisSettings datum_settings(const RootDatums& d) {
   auto& datums = *s.mutable_alignment();
   for (std::size_t k = 0; k < d.pads.size(); ++k) {
     v1::Datum& pad = *datums.add_datums();
-    pad.set_name("A" + std::to_string(k + 1));
+    pad.set_name(std::string(1, 'A') += std::to_string(k + 1));
     pad.set_kind(v1::Datum::PAD);
     put(d.pads[k], pad.mutable_point());
     put(d.root.normal, pad.mutable_normal());

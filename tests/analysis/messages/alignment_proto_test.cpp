@@ -17,7 +17,7 @@ v1::AlignmentSettings three_two_one() {
   const double pads[3][2] = {{10, 10}, {90, 10}, {50, 52}};
   for (int k = 0; k < 3; ++k) {
     v1::Datum& d = *m.add_datums();
-    d.set_name("A" + std::to_string(k + 1));
+    d.set_name(std::string(1, 'A') += std::to_string(k + 1));
     d.set_kind(v1::Datum::PAD);
     put(pads[k][0], pads[k][1], 0, d.mutable_point());
     put(0, 0, 2, d.mutable_normal());  // normalised on reading
