@@ -240,9 +240,8 @@ TEST(Decimation, BadMeshesAreRefusedByName) {
 // A far point in no triangle (a stray scanner return) passes through and does not reach VTK,
 // whose tolerance would otherwise grow with it (it derives it from all the points it is given).
 TEST(Decimation, FarIsolatedVertexPassesThroughAndDoesNotChangeTheResult) {
-  const TriangleMesh plane = grid_mesh(20, 20, 1.0, [](double x, double y) {
-    return 0.01 * std::sin(x) * std::cos(y);
-  });
+  const TriangleMesh plane =
+      grid_mesh(20, 20, 1.0, [](double x, double y) { return 0.01 * std::sin(x) * std::cos(y); });
   TriangleMesh with_stray = plane;
   with_stray.vertices.emplace_back(0.0, 0.0, 4e5);
   const auto base = decimate_mesh(plane);
