@@ -199,7 +199,8 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
                                    springback,
                                    scan_in_cad.points,
                                    model.samples.points,
-                                   &scan_in_cad.normals};
+                                   &scan_in_cad.normals,
+                                   &model.samples.face_ids};
   const auto field = refine_field(*raw, input, s.field.refinement);
   to_proto(field, report.mutable_deformation_field());
   if (!field.uncovered.empty())
@@ -210,6 +211,10 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
     report.add_warnings("deformation field: " + std::to_string(field.seen_from_far_side) +
                         " of them are seen from the other side of the sheet only (the scan's "
                         "normals point into the material there)");
+  if (field.unmeasured_motion > 0)
+    report.add_warnings("deformation field: " + std::to_string(field.unmeasured_motion) +
+                        " of them are scanned, but their flange or bend moves through an "
+                        "unmeasured bend (only the normal component is known there)");
   if (s.field.method == CorrespondenceMethod::kMinCostMatching && !field.optimality_certified)
     report.add_warnings("deformation field: the matching's optimality certificate failed: " +
                         field.matching.certificate.failure);

@@ -81,6 +81,9 @@ struct DeformationField {
   /// refined, solids: of `uncovered`, those the scan around them saw from the other side of the
   /// material only (its normals point into the sheet there)
   std::size_t seen_from_far_side = 0;
+  /// refined: of `uncovered`, those the scan covers but whose material's motion rests on an
+  /// unmeasured bend (part_motion.hpp motion_measured): the scan fixes the normal component only
+  std::size_t unmeasured_motion = 0;
   double scan_coverage = 0.0;    ///< refined: share of model points with a vector
   double residual_rms_mm = 0.0;  ///< refined: rms of the supporting scan points' normal
                                  ///< distance to the refined field's surface

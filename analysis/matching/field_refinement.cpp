@@ -15,11 +15,15 @@ namespace springscan::analysis {
 namespace {
 
 constexpr std::uint32_t kNoScan = std::numeric_limits<std::uint32_t>::max();
+// On a solid, a scan normal more than 60 deg from the CAD normal expected where the scan point
+// lies belongs to another face: a sheet edge beside a skin is at 90 deg, the far skin at 180.
+constexpr double kMinNormalCosine = 0.5;
 
 // The predicted motion of every control point (step 1).
 struct Prediction {
   std::vector<Transform> motion;  // T_result_cad of the material at the point
   std::vector<int> bend;          // bend index when the point lies in a bend zone, else -1
+  std::vector<bool> guessed;      // the motion rests on an unmeasured bend (motion_measured)
 };
 
 // Without a segmentation: the matching's displacement, Gaussian-averaged over the pairs within
@@ -111,11 +115,49 @@ double extent_mid(const std::vector<Vec3>& points, const Vec3& d) {
   return points.empty() ? 0.0 : 0.5 * (lo + hi);
 }
 
+// Faces of neither flange nor bend (sheet edges, hole walls, the end faces of a bend zone): the
+// motion of the material they bound at the point itself, the nearest flange or bend sample's
+// motion_at the control point (in a bend zone's end face: the bend's turn at the point's own
+// angle, which the nearest bend control point, up to w away, does not have). Without sample
+// faces, the nearest control point of a flange or bend.
+void place_other_faces(const FieldRefinementInput& in, const PartMotion& motion,
+                       const std::vector<bool>& known, const std::vector<Vec3>& known_points,
+                       const std::vector<std::uint32_t>& known_index, Prediction& out) {
+  std::vector<Vec3> material;
+  std::vector<int> material_face;
+  const std::vector<int>* faces = in.model_sample_faces;
+  if (faces && faces->size() == in.model_samples.size()) {
+    for (std::size_t k = 0; k < faces->size(); ++k) {
+      const int f = (*faces)[k];
+      if (f < 0 || static_cast<std::size_t>(f) >= motion.face_flange.size()) continue;
+      const auto face = static_cast<std::size_t>(f);
+      if (motion.face_flange[face] < 0 && motion.face_bend[face] < 0) continue;
+      material.push_back(in.model_samples[k]);
+      material_face.push_back(f);
+    }
+  }
+  const KdTree samples(material);
+  const KdTree controls(known_points);
+  for (std::size_t i = 0; i < known.size(); ++i) {
+    if (known[i]) continue;
+    const Vec3& p = in.model_points[i];
+    const auto near = samples.nearest(p);
+    if (near && motion_at(motion, in.segmentation, p, material_face[near->index], out.motion[i])) {
+      out.guessed[i] = !motion_measured(motion, in.segmentation, material_face[near->index]);
+    } else {
+      const std::uint32_t k = known_index[controls.nearest(p)->index];
+      out.motion[i] = out.motion[k];
+      out.guessed[i] = out.guessed[k];
+    }
+  }
+}
+
 Prediction predict(const DeformationField& raw, const FieldRefinementInput& in) {
   const std::size_t n = in.model_points.size();
   Prediction out;
   out.motion.assign(n, Transform::Identity());
   out.bend.assign(n, -1);
+  out.guessed.assign(n, false);
   PartMotion motion;
   if (in.springback)
     motion = part_motion(in.segmentation, *in.springback, in.model_points, in.model_normals,
@@ -134,17 +176,14 @@ Prediction predict(const DeformationField& raw, const FieldRefinementInput& in) 
         motion_at(motion, in.segmentation, in.model_points[i], in.model_faces[i], out.motion[i]);
     if (!known[i]) continue;
     const int face = in.model_faces[i];
+    out.guessed[i] = !motion_measured(motion, in.segmentation, face);
     if (motion.face_flange[static_cast<std::size_t>(face)] < 0)
       out.bend[i] = motion.face_bend[static_cast<std::size_t>(face)];
     known_points.push_back(in.model_points[i]);
     known_index.push_back(static_cast<std::uint32_t>(i));
   }
   if (!known_points.empty()) {
-    // Faces of neither flange nor bend (sheet edges, holes): the nearest known material.
-    const KdTree tree(known_points);
-    for (std::size_t i = 0; i < n; ++i)
-      if (!known[i])
-        out.motion[i] = out.motion[known_index[tree.nearest(in.model_points[i])->index]];
+    place_other_faces(in, motion, known, known_points, known_index, out);
     return out;
   }
   std::vector<Vec3> anchors;
@@ -315,17 +354,22 @@ Support support_of(const FieldRefinementInput& in, const Prediction& pred, const
           const double along = n.dot(d);
           if ((d - along * n).squaredNorm() > r2) continue;
           double res = along;
+          Vec3 expected = n;  // the outward CAD normal where the candidate lies
           if (bend) {
             Vec3 uq = m + d - bend->axis_point;
             uq -= uq.dot(w) * w;
             res = sign * (uq.norm() - rho_m);
+            expected = sign * uq.normalized();
           }
           if (std::abs(res) > window) continue;
-          // A scanner sees a surface from outside the material only: a scan normal against this
-          // skin's outward normal was seen from the other side of the sheet (the far skin).
-          if (scan_normals && n.dot(Rt * (*scan_normals)[g.indices[k]]) < 0.0) {
-            ++far_side;
-            continue;
+          if (scan_normals) {
+            // A scanner sees a surface from outside the material only: a scan normal against
+            // this skin's outward normal was seen from the other side of the sheet (the far
+            // skin); one across it lies on another face (a skin beside a sheet edge or a hole
+            // wall, or that wall beside a skin), whose points the window does not separate.
+            const double cos_in = expected.dot(Rt * (*scan_normals)[g.indices[k]]);
+            if (cos_in < 0.0) ++far_side;
+            if (cos_in < kMinNormalCosine) continue;
           }
           r.push_back(res);
         }
@@ -386,6 +430,13 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
   double sum_sq = 0.0;
   std::size_t used = 0;
   for (std::size_t i = 0; i < n; ++i) {
+    // The scan fixes a vector along the normal only; its other components come from the
+    // material's motion, which an unmeasured bend leaves unknown (a wall seen edge-on moves
+    // by its springback times its height, unseen): no vector rather than a guessed one.
+    if (pred.guessed[i] && support[i].count > 0) {
+      ++out.unmeasured_motion;
+      support[i].count = 0;
+    }
     if (support[i].count == 0) {
       out.uncovered.push_back(static_cast<std::uint32_t>(i));
       out.uncovered_points.push_back(in.model_points[i]);

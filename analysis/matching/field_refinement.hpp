@@ -45,6 +45,10 @@ struct FieldRefinementInput {
   /// drivers and scanner files give them; null or empty: none (the far skin is then excluded by
   /// position alone).
   const std::vector<Vec3>* scan_normals = nullptr;
+  /// The face id of every entry of `model_samples`; null or empty: none (a control point on a
+  /// face of neither flange nor bend then takes the motion of the nearest control point that
+  /// has one, instead of its own position's on the nearest flange or bend).
+  const std::vector<int>* model_sample_faces = nullptr;
 };
 
 /// The refined field: `vectors` replaced by one refined vector per covered control point

@@ -58,10 +58,14 @@ BendFrame bend_frame(const PartSegmentation& s, const SpringbackResult& r, std::
 }
 
 // The chain: the root stays, each flange reached through a bend turns about its axis.
+// measured[f]: every bend on f's chain was measured.
 std::vector<Transform> chain(const PartSegmentation& s, const SpringbackResult& r,
-                             const std::vector<double>& turn, int root) {
+                             const std::vector<double>& turn, const std::vector<bool>& bend_measured,
+                             int root, std::vector<bool>& measured) {
   std::vector<Transform> T(s.flanges.size(), Transform::Identity());
   std::vector<bool> placed(s.flanges.size(), false);
+  measured.assign(s.flanges.size(), false);
+  measured[static_cast<std::size_t>(root)] = true;
   std::deque<int> queue{root};
   placed[static_cast<std::size_t>(root)] = true;
   while (!queue.empty()) {
@@ -83,6 +87,7 @@ std::vector<Transform> chain(const PartSegmentation& s, const SpringbackResult& 
       if (next < 0) continue;
       T[static_cast<std::size_t>(next)] = T_next;
       placed[static_cast<std::size_t>(next)] = true;
+      measured[static_cast<std::size_t>(next)] = measured[static_cast<std::size_t>(f)] && bend_measured[k];
       queue.push_back(next);
     }
   }
@@ -167,16 +172,20 @@ PartMotion part_motion(const PartSegmentation& s, const SpringbackResult& r,
       out.root_flange = static_cast<int>(k);
   }
   out.bend_turn_rad.assign(s.bends.size(), 0.0);
+  out.bend_measured.assign(s.bends.size(), false);
   for (std::size_t k = 0; k < s.bends.size(); ++k) {
     const BendMeasurement* m = measurement_of(r, s.bends[k].id);
     // The bend opened by springback: b turns back by it relative to a (measurement convention:
     // the nominal turn a -> b is positive about axis_direction).
-    if (m && m->measured && std::isfinite(m->springback_deg))
+    if (m && m->measured && std::isfinite(m->springback_deg)) {
       out.bend_turn_rad[k] = -m->springback_deg * kDeg;
+      out.bend_measured[k] = true;
+    }
   }
   if (out.root_flange < 0) return out;
   out.usable = true;
-  const std::vector<Transform> K = chain(s, r, out.bend_turn_rad, out.root_flange);
+  const std::vector<Transform> K =
+      chain(s, r, out.bend_turn_rad, out.bend_measured, out.root_flange, out.flange_measured);
 
   // G from the control points on fitted flanges: the chain's position against the measured plane.
   std::vector<Vec3> y, z, n;
@@ -206,6 +215,20 @@ PartMotion part_motion(const PartSegmentation& s, const SpringbackResult& r,
   out.flange.reserve(K.size());
   for (const Transform& k : K) out.flange.push_back(out.correction * k);
   return out;
+}
+
+bool motion_measured(const PartMotion& motion, const PartSegmentation& s, int face_id) {
+  if (!motion.usable || face_id < 0 || face_id >= static_cast<int>(motion.face_flange.size()))
+    return false;
+  const std::size_t face = static_cast<std::size_t>(face_id);
+  if (motion.face_flange[face] >= 0)
+    return motion.flange_measured[static_cast<std::size_t>(motion.face_flange[face])];
+  const int k = motion.face_bend[face];
+  if (k < 0 || !motion.bend_measured[static_cast<std::size_t>(k)]) return false;
+  const Bend& bend = s.bends[static_cast<std::size_t>(k)];
+  const int a = index_of_flange(s, bend.flange_a), b = index_of_flange(s, bend.flange_b);
+  return a >= 0 && b >= 0 && motion.flange_measured[static_cast<std::size_t>(a)] &&
+         motion.flange_measured[static_cast<std::size_t>(b)];
 }
 
 bool motion_at(const PartMotion& motion, const PartSegmentation& s, const Vec3& p, int face_id,

@@ -32,6 +32,12 @@ struct PartMotion {
   /// Translations no flange plane constrains (along the bend lines of an extrusion): G keeps
   /// the best fit's value there; field_refinement.cpp measures them at the sheet's edges.
   std::vector<Vec3> free_translations;
+  /// Per flange: its motion rests on measurements only, every bend on its chain from the root
+  /// measured. A flange reached through an unmeasured bend (its wall not seen, a closed hem)
+  /// is placed as if that bend had not sprung back: a guess, exact in no direction its plane
+  /// does not fix.
+  std::vector<bool> flange_measured;
+  std::vector<bool> bend_measured;  ///< per segmentation bend: the springback stage measured it
   int root_flange = -1;  ///< index of the flange the chain starts from (does not turn)
   bool usable = false;   ///< at least one flange was fitted
 };
@@ -41,6 +47,10 @@ struct PartMotion {
 PartMotion part_motion(const PartSegmentation& segmentation, const SpringbackResult& springback,
                        const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
                        const std::vector<int>& face_ids);
+
+/// Whether the motion of face `face_id` rests on measurements (its flange's, or for a bend face
+/// both flanges' and the bend's); false for faces of neither.
+bool motion_measured(const PartMotion& motion, const PartSegmentation& segmentation, int face_id);
 
 /// The rigid motion (T_result_cad) of the material at CAD point `p` of face `face_id`: its
 /// flange's, or for a bend face the blend by angular position. `std::nullopt`-like: returns

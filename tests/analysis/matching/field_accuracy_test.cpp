@@ -76,7 +76,13 @@ double compensation_p95(const FieldRun& run, double alpha) {
   return testing::p95(err);
 }
 
-class FieldAccuracy : public ::testing::TestWithParam<int> {};
+class FieldAccuracy : public ::testing::TestWithParam<int> {
+ protected:
+  void SetUp() override {
+    if (testing::kUnderSanitizer && part_cases()[static_cast<std::size_t>(GetParam())].profile == false)
+      GTEST_SKIP() << "a production part: the release suite runs it";
+  }
+};
 
 TEST_P(FieldAccuracy, SubSampleAgainstTheProducedTruth) {
   const PartCase c = part_cases()[static_cast<std::size_t>(GetParam())];
@@ -183,11 +189,10 @@ std::string case_name(const ::testing::TestParamInfo<int>& param) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Parts, FieldAccuracy, ::testing::Range(0, 4), case_name);
-// The openamr parts are solid sheets scanned from one side. The global fit now places the
-// scanned skin right (docs/alignment.md "Solid sheets"); the field comes within about twice its
-// bounds there (p95 0.10-0.12 mm) and misses some control points of the scanned skin
-// (docs/matching.md "Not yet right"): enable when it meets them.
-INSTANTIATE_TEST_SUITE_P(DISABLED_SolidParts, FieldAccuracy, ::testing::Range(4, 6), case_name);
+// The openamr parts are solid sheets scanned from one side (docs/matching.md "Refined field",
+// solids): the unseen skin has no vector, hole walls and sheet edges are supported by their own
+// scan only. Release only: 5-15 s a case there, minutes under the sanitizers.
+INSTANTIATE_TEST_SUITE_P(SolidParts, FieldAccuracy, ::testing::Range(4, 6), case_name);
 
 }  // namespace
 }  // namespace springscan::analysis

@@ -86,7 +86,11 @@ struct FieldRun {
   v1::InspectionReport report;
   std::vector<Vec3> truth;              ///< per model control point (report index), result frame
   std::vector<Vec3> truth_normal;       ///< the produced surface normal there, result frame
-  std::vector<int> scanned_points;      ///< truth scan points (not outliers) within 1.5 mm
+  /// truth scan points (not outliers) within 1.5 mm on the control point's own skin (the CAD
+  /// normals within 60 deg): on a solid the other skin, one thickness behind, is not scanned
+  /// where this one is
+  std::vector<int> scanned_points;
+  std::vector<int> control_face;        ///< CAD face id of each control point
   std::vector<Vec3> control;            ///< control points (CAD), by model index
   std::vector<parts::BendTruth> bends;  ///< the produced part's bends (springback applied)
   Transform T_result_part = Transform::Identity();  ///< the report's frame from the part's
@@ -136,7 +140,14 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
     append(scan.cloud.normals, pass->cloud.normals);  // toward the scanner, as a scanner gives
     append(scan.cad_points, pass->cad_points);
     append(scan.outlier, pass->outlier);
+    append(scan.cloud.face_ids, pass->cloud.face_ids);
   }
+  // The CAD normal of every scan point (the produced normal taken back by its material's motion).
+  std::vector<Vec3> cad_normal(scan.cad_points.size());
+  for (std::size_t j = 0; j < cad_normal.size(); ++j)
+    cad_normal[j] = part->local_transform(scan.cad_points[j], scan.cloud.face_ids[j]).linear().transpose() *
+                    (sc.pose.linear().transpose() * scan.cloud.normals[j]);
+  scan.cloud.face_ids.clear();
   if (!sc.scanner_normals) scan.cloud.normals.clear();
   auto outcome = run_inspection(exact_model(cad), scan.cloud, settings);
   EXPECT_TRUE(outcome) << outcome.message();
@@ -160,9 +171,12 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
     run.control[static_cast<std::size_t>(v.model_index())] =
         Vec3(v.model().x(), v.model().y(), v.model().z());
   const KdTree samples(cad.model.samples.points);
-  std::vector<Vec3> seen;
-  for (std::size_t j = 0; j < scan.cad_points.size(); ++j)
-    if (!scan.outlier[j]) seen.push_back(scan.cad_points[j]);
+  std::vector<Vec3> seen, seen_normal;
+  for (std::size_t j = 0; j < scan.cad_points.size(); ++j) {
+    if (scan.outlier[j]) continue;
+    seen.push_back(scan.cad_points[j]);
+    seen_normal.push_back(cad_normal[j]);
+  }
   const KdTree seen_tree(seen);
   std::vector<Neighbor> near;
   for (const Vec3& m : run.control) {
@@ -173,7 +187,14 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
     run.truth_normal.push_back(T_result_part.linear() * local.linear() *
                                cad.model.samples.normals[k]);
     seen_tree.radius(m, 1.5, near);
-    run.scanned_points.push_back(static_cast<int>(near.size()));
+    const Vec3& n = cad.model.samples.normals[k];
+    // A shell has one surface, seen from either side; a solid's skins face away from each other.
+    const auto same_skin = [&](const Neighbor& q) {
+      const double c = seen_normal[q.index].dot(n);
+      return (part->solid ? c : std::abs(c)) > 0.5;
+    };
+    run.scanned_points.push_back(static_cast<int>(std::count_if(near.begin(), near.end(), same_skin)));
+    run.control_face.push_back(face);
   }
   return run;
 }
