@@ -200,7 +200,8 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
                                    scan_in_cad.points,
                                    model.samples.points,
                                    &scan_in_cad.normals,
-                                   &model.samples.face_ids};
+                                   &model.samples.face_ids,
+                                   &model.samples.normals};
   const auto field = refine_field(*raw, input, s.field.refinement);
   to_proto(field, report.mutable_deformation_field());
   if (!field.uncovered.empty())

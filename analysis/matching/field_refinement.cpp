@@ -24,7 +24,42 @@ struct Prediction {
   std::vector<Transform> motion;  // T_result_cad of the material at the point
   std::vector<int> bend;          // bend index when the point lies in a bend zone, else -1
   std::vector<bool> guessed;      // the motion rests on an unmeasured bend (motion_measured)
+  std::vector<Vec3> curvature;    // other faces: (a, b, c) of the CAD surface's height
+                                  // h = (a x^2 + 2 b x y + c y^2) / 2 over the tangent plane
 };
+
+// The tangent basis of a normal in which Prediction::curvature is given.
+void tangent_basis(const Vec3& n, Vec3& u, Vec3& v) {
+  u = n.unitOrthogonal();
+  v = n.cross(u);
+}
+
+// The CAD surface's second-order shape at a control point of a curved face of neither flange
+// nor bend (a hole wall, a rounded corner; a bend zone's residual is radial already), from the
+// exact normals of that face's samples within 3 mm: the tangent part of a sample normal at
+// tangent offset t is -K t. Over a 1.5 mm support on a 5 mm hole the surface leaves the tangent
+// plane by 0.2 mm, which the normal offset would otherwise average in.
+Vec3 face_curvature(const FieldRefinementInput& in, const KdTree& samples, std::size_t i,
+                    std::vector<Neighbor>& near) {
+  const Vec3& m = in.model_points[i];
+  const Vec3& n = in.model_normals[i];
+  Vec3 u, v;
+  tangent_basis(n, u, v);
+  samples.radius(m, 3.0, near);
+  Mat3 A = 1e-3 * Mat3::Identity();  // a ridge: a narrow wall leaves c barely determined
+  Vec3 rhs = Vec3::Zero();
+  for (const Neighbor& k : near) {
+    if ((*in.model_sample_faces)[k.index] != in.model_faces[i]) continue;
+    const Vec3 d = in.model_samples[k.index] - m;
+    const double x = u.dot(d), y = v.dot(d);
+    const Vec3& ns = (*in.model_sample_normals)[k.index];
+    // n_u = -(a x + b y), n_v = -(b x + c y)
+    const Vec3 ju(x, y, 0.0), jv(0.0, x, y);
+    A += ju * ju.transpose() + jv * jv.transpose();
+    rhs -= ju * u.dot(ns) + jv * v.dot(ns);
+  }
+  return A.ldlt().solve(rhs);
+}
 
 // Without a segmentation: the matching's displacement, Gaussian-averaged over the pairs within
 // three median spacings (the pairs' along-surface scatter averages out).
@@ -138,9 +173,15 @@ void place_other_faces(const FieldRefinementInput& in, const PartMotion& motion,
   }
   const KdTree samples(material);
   const KdTree controls(known_points);
+  const bool shaped = faces && faces->size() == in.model_samples.size() &&
+                      in.model_sample_normals &&
+                      in.model_sample_normals->size() == in.model_samples.size();
+  const KdTree all_samples(shaped ? in.model_samples : std::vector<Vec3>{});
+  std::vector<Neighbor> near_samples;
   for (std::size_t i = 0; i < known.size(); ++i) {
     if (known[i]) continue;
     const Vec3& p = in.model_points[i];
+    if (shaped) out.curvature[i] = face_curvature(in, all_samples, i, near_samples);
     const auto near = samples.nearest(p);
     if (near && motion_at(motion, in.segmentation, p, material_face[near->index], out.motion[i])) {
       out.guessed[i] = !motion_measured(motion, in.segmentation, material_face[near->index]);
@@ -158,6 +199,7 @@ Prediction predict(const DeformationField& raw, const FieldRefinementInput& in) 
   out.motion.assign(n, Transform::Identity());
   out.bend.assign(n, -1);
   out.guessed.assign(n, false);
+  out.curvature.assign(n, Vec3::Zero());
   PartMotion motion;
   if (in.springback)
     motion = part_motion(in.segmentation, *in.springback, in.model_points, in.model_normals,
@@ -332,6 +374,9 @@ Support support_of(const FieldRefinementInput& in, const Prediction& pred, const
   const Mat3 Rt = M.linear().transpose();
   const Bend* bend =
       pred.bend[i] >= 0 ? &in.segmentation.bends[static_cast<std::size_t>(pred.bend[i])] : nullptr;
+  const Vec3& K = pred.curvature[i];
+  Vec3 tu, tv;
+  tangent_basis(n, tu, tv);
   Vec3 w = Vec3::Zero(), um = Vec3::Zero();
   double rho_m = 0.0, sign = 1.0;
   if (bend) {
@@ -355,6 +400,12 @@ Support support_of(const FieldRefinementInput& in, const Prediction& pred, const
           if ((d - along * n).squaredNorm() > r2) continue;
           double res = along;
           Vec3 expected = n;  // the outward CAD normal where the candidate lies
+          if (!K.isZero()) {  // a curved face: the height over the tangent plane, the normal
+            const double x = tu.dot(d), y = tv.dot(d);
+            res -= 0.5 * (K.x() * x * x + 2.0 * K.y() * x * y + K.z() * y * y);
+            expected =
+                (n - (K.x() * x + K.y() * y) * tu - (K.y() * x + K.z() * y) * tv).normalized();
+          }
           if (bend) {
             Vec3 uq = m + d - bend->axis_point;
             uq -= uq.dot(w) * w;

@@ -14,12 +14,15 @@
 //     axis, so the cylinder's curvature does not bias it);
 //     along a direction no flange plane fixes (the bend lines of an extrusion), the scan's
 //     sheet edges against the CAD's give the position;
+//     on a curved face of neither flange nor bend (a hole wall), the CAD surface's height over
+//     the tangent plane, from the samples' exact normals, is taken out of the offsets;
 //  3. points with fewer than min_support_points scan points around them are not covered and
 //     get no vector. On a solid the scanner sees each skin from outside the material only: a
-//     scan point supports a control point only if its normal (when the scan has normals) points
-//     out of the material there, and the window along the normal stays within half the sheet
-//     thickness, so the far skin never supports a vector (docs/matching.md "Refined field",
-//     coverage).
+//     scan point supports a control point only if its normal (when the scan has normals) lies
+//     within 60 deg of the CAD normal expected where it lies (not the far skin, not a sheet
+//     edge or hole wall beside a skin), and the window along the normal stays within half the
+//     sheet thickness, so the far skin never supports a vector; a point whose material moves
+//     through an unmeasured bend gets none either (docs/matching.md "Refined field", coverage).
 // Each vector's uncertainty is the robust sigma of its support over sqrt(count).
 //
 // Thread safety: a pure function; the result does not depend on the thread count.
@@ -49,6 +52,9 @@ struct FieldRefinementInput {
   /// face of neither flange nor bend then takes the motion of the nearest control point that
   /// has one, instead of its own position's on the nearest flange or bend).
   const std::vector<int>* model_sample_faces = nullptr;
+  /// Their exact normals; with the faces, the curvature of a hole wall or a rounded sheet edge
+  /// is taken out of its normal offsets. Null or empty: those faces are taken as flat.
+  const std::vector<Vec3>* model_sample_normals = nullptr;
 };
 
 /// The refined field: `vectors` replaced by one refined vector per covered control point

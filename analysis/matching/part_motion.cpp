@@ -60,8 +60,9 @@ BendFrame bend_frame(const PartSegmentation& s, const SpringbackResult& r, std::
 // The chain: the root stays, each flange reached through a bend turns about its axis.
 // measured[f]: every bend on f's chain was measured.
 std::vector<Transform> chain(const PartSegmentation& s, const SpringbackResult& r,
-                             const std::vector<double>& turn, const std::vector<bool>& bend_measured,
-                             int root, std::vector<bool>& measured) {
+                             const std::vector<double>& turn,
+                             const std::vector<bool>& bend_measured, int root,
+                             std::vector<bool>& measured) {
   std::vector<Transform> T(s.flanges.size(), Transform::Identity());
   std::vector<bool> placed(s.flanges.size(), false);
   measured.assign(s.flanges.size(), false);
@@ -87,7 +88,8 @@ std::vector<Transform> chain(const PartSegmentation& s, const SpringbackResult& 
       if (next < 0) continue;
       T[static_cast<std::size_t>(next)] = T_next;
       placed[static_cast<std::size_t>(next)] = true;
-      measured[static_cast<std::size_t>(next)] = measured[static_cast<std::size_t>(f)] && bend_measured[k];
+      measured[static_cast<std::size_t>(next)] =
+          measured[static_cast<std::size_t>(f)] && bend_measured[k];
       queue.push_back(next);
     }
   }

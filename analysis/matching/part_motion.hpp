@@ -38,8 +38,8 @@ struct PartMotion {
   /// does not fix.
   std::vector<bool> flange_measured;
   std::vector<bool> bend_measured;  ///< per segmentation bend: the springback stage measured it
-  int root_flange = -1;  ///< index of the flange the chain starts from (does not turn)
-  bool usable = false;   ///< at least one flange was fitted
+  int root_flange = -1;             ///< index of the flange the chain starts from (does not turn)
+  bool usable = false;              ///< at least one flange was fitted
 };
 
 /// Builds the chained motions from the bend table and fits G to the flanges' local fits at

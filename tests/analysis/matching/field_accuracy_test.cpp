@@ -79,7 +79,8 @@ double compensation_p95(const FieldRun& run, double alpha) {
 class FieldAccuracy : public ::testing::TestWithParam<int> {
  protected:
   void SetUp() override {
-    if (testing::kUnderSanitizer && part_cases()[static_cast<std::size_t>(GetParam())].profile == false)
+    if (testing::kUnderSanitizer &&
+        part_cases()[static_cast<std::size_t>(GetParam())].profile == false)
       GTEST_SKIP() << "a production part: the release suite runs it";
   }
 };

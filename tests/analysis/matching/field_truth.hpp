@@ -84,8 +84,8 @@ inline double p95(std::vector<double> v) {
 
 struct FieldRun {
   v1::InspectionReport report;
-  std::vector<Vec3> truth;              ///< per model control point (report index), result frame
-  std::vector<Vec3> truth_normal;       ///< the produced surface normal there, result frame
+  std::vector<Vec3> truth;         ///< per model control point (report index), result frame
+  std::vector<Vec3> truth_normal;  ///< the produced surface normal there, result frame
   /// truth scan points (not outliers) within 1.5 mm on the control point's own skin (the CAD
   /// normals within 60 deg): on a solid the other skin, one thickness behind, is not scanned
   /// where this one is
@@ -145,8 +145,9 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
   // The CAD normal of every scan point (the produced normal taken back by its material's motion).
   std::vector<Vec3> cad_normal(scan.cad_points.size());
   for (std::size_t j = 0; j < cad_normal.size(); ++j)
-    cad_normal[j] = part->local_transform(scan.cad_points[j], scan.cloud.face_ids[j]).linear().transpose() *
-                    (sc.pose.linear().transpose() * scan.cloud.normals[j]);
+    cad_normal[j] =
+        part->local_transform(scan.cad_points[j], scan.cloud.face_ids[j]).linear().transpose() *
+        (sc.pose.linear().transpose() * scan.cloud.normals[j]);
   scan.cloud.face_ids.clear();
   if (!sc.scanner_normals) scan.cloud.normals.clear();
   auto outcome = run_inspection(exact_model(cad), scan.cloud, settings);
@@ -193,7 +194,8 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
       const double c = seen_normal[q.index].dot(n);
       return (part->solid ? c : std::abs(c)) > 0.5;
     };
-    run.scanned_points.push_back(static_cast<int>(std::count_if(near.begin(), near.end(), same_skin)));
+    run.scanned_points.push_back(
+        static_cast<int>(std::count_if(near.begin(), near.end(), same_skin)));
     run.control_face.push_back(face);
   }
   return run;
