@@ -57,7 +57,9 @@ void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
   const Vec3 along = bend ? bend->axis_direction : flange.normal.unitOrthogonal();
   const std::vector<std::uint32_t> skin = one_skin(scan, fit.indices, flange);
   const FlangeFrame frame = flange_frame(scan, skin, flange.normal, along);
-  fit.shape = fit_flange_shape(scan, skin, frame, st.flange);
+  fit.shape =
+      fit_flange_shape(scan, skin, frame, st.flange,
+                       fit.fitted ? fit.fit.rms_mm : std::numeric_limits<double>::infinity());
   if (!fit.has_bend_line) {  // no direction across: a curl radius or a twist means nothing
     fit.shape.curled = false;
     fit.shape.surface.A = 0.0;

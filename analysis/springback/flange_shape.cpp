@@ -147,18 +147,16 @@ FlangeFrame flange_frame(const PointCloud& cloud, std::span<const std::uint32_t>
 }
 
 FlangeShape fit_flange_shape(const PointCloud& cloud, std::span<const std::uint32_t> points,
-                             const FlangeFrame& frame, const FlangeShapeSettings& st) {
+                             const FlangeFrame& frame, const FlangeShapeSettings& st,
+                             double plane_rms_mm) {
   FlangeShape shape;
   shape.frame = frame;
   if (points.size() < static_cast<std::size_t>(std::max(st.min_points, 6))) return shape;
   std::vector<Vec3> q;
   q.reserve(points.size());
-  double s_min = std::numeric_limits<double>::infinity(), s_max = -s_min;
-  double t_min = s_min, t_max = s_max;
+  double t_min = std::numeric_limits<double>::infinity(), t_max = -t_min;
   for (std::uint32_t i : points) {
     q.push_back(frame.local(cloud.points[i]));
-    s_min = std::min(s_min, q.back().x());
-    s_max = std::max(s_max, q.back().x());
     t_min = std::min(t_min, q.back().y());
     t_max = std::max(t_max, q.back().y());
   }
@@ -167,9 +165,23 @@ FlangeShape fit_flange_shape(const PointCloud& cloud, std::span<const std::uint3
   // Curvature of the middle section (t = 0) and how far such a curl bows the points' width.
   const FlangeSurface& f = shape.surface;
   const double k = 2.0 * f.A / std::sqrt(std::max(1e-12, f.B * f.B + 1.0 - 4.0 * f.A * f.C));
-  const double width = s_max - s_min;
+  // The width the curl bows over is the inliers': a few stray points beyond the flange's
+  // edge (another face's, nearest to this flange's samples) made a 15 mm tab 40 mm wide and
+  // its noise-level curvature a 0.1 mm bow.
+  double in_min = std::numeric_limits<double>::infinity(), in_max = -in_min, sum2 = 0.0;
+  std::size_t inliers = 0;
+  for (const Vec3& p : q) {
+    const double r = p.z() - model_h(f, p);
+    if (!(std::abs(r) <= shape.inlier_threshold_mm)) continue;
+    in_min = std::min(in_min, p.x()), in_max = std::max(in_max, p.x());
+    sum2 += r * r;
+    ++inliers;
+  }
+  const double width = in_max > in_min ? in_max - in_min : 0.0;
+  const double curl_rms = inliers > 0 ? std::sqrt(sum2 / static_cast<double>(inliers)) : 0.0;
   shape.curled = std::abs(f.A) > st.curl_significance * sigma_A &&
-                 std::abs(k) * width * width / 8.0 >= st.min_curl_sagitta_mm;
+                 std::abs(k) * width * width / 8.0 >= st.min_curl_sagitta_mm &&
+                 curl_rms <= plane_rms_mm;
   if (shape.curled) {
     shape.curl_radius_mm = 1.0 / k;
   } else {  // flat: the plane-and-twist model on the same inliers

@@ -83,9 +83,13 @@ FlangeFrame flange_frame(const PointCloud& cloud, std::span<const std::uint32_t>
                          const Vec3& normal, const Vec3& along);
 
 /// Fits the shape model to `points` of `cloud` (CAD frame). Fewer than min_points points (or
-/// a degenerate spread) leave it unmeasured.
+/// a degenerate spread) leave it unmeasured. `plane_rms_mm`: the rms of the flange's plane
+/// fit, when there is one; a curl must fit its inliers no worse than that (a real curl fits
+/// far better than the plane; stray points among a short tab's few bend a quadratic that fits
+/// worse).
 FlangeShape fit_flange_shape(const PointCloud& cloud, std::span<const std::uint32_t> points,
-                             const FlangeFrame& frame, const FlangeShapeSettings& settings = {});
+                             const FlangeFrame& frame, const FlangeShapeSettings& settings = {},
+                             double plane_rms_mm = std::numeric_limits<double>::infinity());
 
 /// The unit normal (near frame.n) of the tangent plane of `surface` at the point of its section
 /// through `near` that lies closest to `near` (the bend axis next to the flange's end: on a

@@ -1,5 +1,6 @@
 #include "analysis/springback/springback.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -24,6 +25,14 @@ std::string check(const PartModel& model, const SpringbackSettings& st) {
     return "model samples need normals and face ids (" + std::to_string(s.size()) + " samples)";
   if (!(st.bend_margin_mm >= 0.0 && st.bend_margin_mm < 1000.0))
     return "bend_margin_mm " + std::to_string(st.bend_margin_mm) + " outside [0, 1000)";
+  if (!(st.bend_margin_fraction >= 0.0 && st.bend_margin_fraction <= 1.0))
+    return "bend_margin_fraction " + std::to_string(st.bend_margin_fraction) + " outside [0, 1]";
+  if (!(st.min_bend_margin_mm >= 0.0 && st.min_bend_margin_mm < 1000.0))
+    return "min_bend_margin_mm " + std::to_string(st.min_bend_margin_mm) + " outside [0, 1000)";
+  if (!(st.max_angle_sigma_deg >= 0.0))
+    return "max_angle_sigma_deg " + std::to_string(st.max_angle_sigma_deg) + " must be >= 0";
+  if (st.dense_flange_points < 0)
+    return "dense_flange_points " + std::to_string(st.dense_flange_points) + " must be >= 0";
   if (!(st.assignment_distance_mm > 0.0))
     return "assignment_distance_mm " + std::to_string(st.assignment_distance_mm) + " must be > 0";
   if (!(st.shape.station_spacing_mm > 0.0 && st.shape.station_spacing_mm <= 10000.0))
@@ -49,10 +58,45 @@ std::string check(const PartModel& model, const SpringbackSettings& st) {
   return {};
 }
 
+// The bend margin of each flange (segmentation order): bend_margin_mm on a deep flange, a
+// fraction of the depth on a short tab (its depth: how far its farthest sample lies from the
+// nearest of its bends' axes), never below min_bend_margin_mm. A fixed 2 mm margin leaves a
+// 6 mm tab of a 0.8 mm sheet (Ri 1.2) under 3 mm of flat; the floor still keeps points that a
+// small misalignment puts on the far side of the tangent line off the flange.
+std::vector<double> flange_margins(const PartModel& model, const SpringbackSettings& st) {
+  const auto& seg = model.segmentation;
+  const PointCloud& s = model.samples;
+  std::unordered_map<int, std::size_t> flange_of_face;
+  for (std::size_t f = 0; f < seg.flanges.size(); ++f)
+    for (int face : seg.flanges[f].face_ids) flange_of_face[face] = f;
+  std::vector<std::vector<const Bend*>> bends(seg.flanges.size());
+  for (const Bend& b : seg.bends)
+    for (std::size_t f = 0; f < seg.flanges.size(); ++f)
+      if (seg.flanges[f].id == b.flange_a || seg.flanges[f].id == b.flange_b)
+        bends[f].push_back(&b);
+  std::vector<double> depth(seg.flanges.size(), 0.0);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    const auto it = flange_of_face.find(s.face_ids[i]);
+    if (it == flange_of_face.end() || bends[it->second].empty()) continue;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Bend* b : bends[it->second]) {
+      const Vec3 d = s.points[i] - b->axis_point, a = b->axis_direction.normalized();
+      nearest = std::min(nearest, (d - d.dot(a) * a).norm());
+    }
+    depth[it->second] = std::max(depth[it->second], nearest);
+  }
+  std::vector<double> margin(seg.flanges.size(), st.bend_margin_mm);
+  for (std::size_t f = 0; f < margin.size(); ++f)
+    margin[f] = std::min(st.bend_margin_mm,
+                         std::max(st.min_bend_margin_mm, st.bend_margin_fraction * depth[f]));
+  return margin;
+}
+
 // Per model sample: the index (into segmentation.flanges) of its flange, or kNoFlange for bend
-// and other faces and for flange samples within the margin of a bend sample. The margin is
-// measured on the model, so it does not depend on how far the part sprang back.
-std::vector<std::int32_t> sample_labels(const PartModel& model, double margin_mm, int threads) {
+// and other faces and for flange samples within their flange's margin of a bend sample. The
+// margin is measured on the model, so it does not depend on how far the part sprang back.
+std::vector<std::int32_t> sample_labels(const PartModel& model, const std::vector<double>& margin,
+                                        int threads) {
   std::unordered_map<int, std::int32_t> flange_of_face;
   const auto& flanges = model.segmentation.flanges;
   for (std::size_t f = 0; f < flanges.size(); ++f)
@@ -67,11 +111,14 @@ std::vector<std::int32_t> sample_labels(const PartModel& model, double margin_mm
     else
       bend_points.push_back(s.points[i]);  // bend and other faces: never fitted as flange
   }
-  if (bend_points.empty() || margin_mm <= 0.0) return labels;
+  if (bend_points.empty()) return labels;
   const KdTree bends(std::move(bend_points));
   for_each_block(s.size(), kBlock, threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
-    for (std::size_t i = lo; i < hi; ++i)
-      if (labels[i] != kNoFlange && bends.nearest(s.points[i], margin_mm)) labels[i] = kNoFlange;
+    for (std::size_t i = lo; i < hi; ++i) {
+      if (labels[i] == kNoFlange) continue;
+      const double m = margin[static_cast<std::size_t>(labels[i])];
+      if (m > 0.0 && bends.nearest(s.points[i], m)) labels[i] = kNoFlange;
+    }
   });
   return labels;
 }
@@ -127,17 +174,100 @@ std::vector<std::vector<std::uint32_t>> assign_points(
   return out;
 }
 
+// A flange short of points after thinning takes more from the full scan, so that a short tab
+// is fitted at the scan's own density (thinning is for the large flanges, whose planes are
+// fixed long before): every `every`-th scan point inside the flange's box (its labelled
+// samples' principal axes, widened by kDenseBoxMm), labelled like the thinned points, chosen so
+// the flange ends with about dense_flange_points. Few queries: only the small flanges' boxes.
+void add_dense_points(const LocalFitTarget& target, const std::vector<std::int32_t>& labels,
+                      const PointCloud& scan, std::size_t stride, const SpringbackSettings& st,
+                      std::vector<std::vector<std::uint32_t>>& assigned, std::size_t flanges) {
+  constexpr double kDenseBoxMm = 2.0;
+  if (stride <= 1 || st.dense_flange_points <= 0) return;
+  const auto wanted = static_cast<std::size_t>(st.dense_flange_points);
+  struct Box {
+    std::int32_t flange = kNoFlange;
+    std::size_t every = 1;
+    Vec3 centre = Vec3::Zero();
+    Mat3 axes = Mat3::Identity();  // rows: principal directions
+    Vec3 half = Vec3::Zero();
+  };
+  // Principal axes of each flange's labelled samples.
+  const PointCloud& s = target.model().samples;
+  std::vector<Vec3> sum(flanges, Vec3::Zero());
+  std::vector<Mat3> second(flanges, Mat3::Zero());
+  std::vector<std::size_t> count(flanges, 0);
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (labels[i] < 0 || static_cast<std::size_t>(labels[i]) >= flanges) continue;
+    const auto f = static_cast<std::size_t>(labels[i]);
+    sum[f] += s.points[i];
+    second[f] += s.points[i] * s.points[i].transpose();
+    ++count[f];
+  }
+  std::vector<Box> boxes;
+  std::vector<char> small(flanges, 0);
+  for (std::size_t f = 0; f < flanges; ++f) {
+    // A flange the thinned scan does not see at all gains nothing from the full one.
+    if (assigned[f].empty() || assigned[f].size() >= wanted || count[f] < 3) continue;
+    Box b;
+    b.flange = static_cast<std::int32_t>(f);
+    b.every = std::max<std::size_t>(1, assigned[f].size() * stride / wanted);
+    b.centre = sum[f] / static_cast<double>(count[f]);
+    const Mat3 cov = second[f] / static_cast<double>(count[f]) - b.centre * b.centre.transpose();
+    b.axes = Eigen::SelfAdjointEigenSolver<Mat3>(cov).eigenvectors().transpose();
+    boxes.push_back(b);
+    small[f] = 1;
+  }
+  if (boxes.empty()) return;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (labels[i] < 0 || static_cast<std::size_t>(labels[i]) >= flanges || !small[labels[i]])
+      continue;
+    for (Box& b : boxes)
+      if (b.flange == labels[i])
+        b.half = b.half.cwiseMax((b.axes * (s.points[i] - b.centre)).cwiseAbs());
+  }
+  for (Box& b : boxes) b.half.array() += kDenseBoxMm;
+  const std::size_t n = scan.size();
+  std::vector<std::vector<std::pair<std::int32_t, std::uint32_t>>> found(block_count(n));
+  parallel_blocks(n, st.threads, [&](std::size_t block, std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i) {
+      if (i % stride == 0 || !scan.points[i].allFinite()) continue;  // thinned: assigned already
+      const Vec3& p = scan.points[i];
+      const bool inside = std::any_of(boxes.begin(), boxes.end(), [&](const Box& b) {
+        return i % b.every == 0 &&
+               ((b.axes * (p - b.centre)).cwiseAbs().array() <= b.half.array()).all();
+      });
+      if (!inside) continue;
+      const auto nn = target.tree().nearest(p, st.assignment_distance_mm);
+      if (!nn) continue;
+      const std::int32_t label = labels[nn->index];
+      if (label >= 0 && static_cast<std::size_t>(label) < flanges && small[label])
+        found[block].emplace_back(label, static_cast<std::uint32_t>(i));
+    }
+  });
+  for (const auto& block : found)
+    for (const auto& [label, i] : block) assigned[static_cast<std::size_t>(label)].push_back(i);
+}
+
 FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const Flange& flange,
                      std::vector<std::uint32_t> indices, const SpringbackSettings& st) {
   FlangeFit out;
   out.flange_id = flange.id;
   out.face_ids = flange.face_ids;
   out.indices = std::move(indices);
-  if (out.indices.size() < static_cast<std::size_t>(std::max(st.min_points_per_flange, 3))) {
+  const auto min_points =
+      static_cast<std::size_t>(std::max({st.min_points_per_flange, st.local_fit.min_points, 3}));
+  if (out.indices.size() < min_points) {
     out.status = "flange " + std::to_string(flange.id) + ": " + std::to_string(out.indices.size()) +
-                 " points, fewer than min_points_per_flange " +
-                 std::to_string(st.min_points_per_flange);
+                 " scan points, fewer than the " + std::to_string(min_points) +
+                 " a plane fit needs (the scan sees little or nothing of it)";
     return out;
+  }
+  for (std::uint32_t i : out.indices) out.centroid += scan.points[i];
+  out.centroid /= static_cast<double>(out.indices.size());
+  for (std::uint32_t i : out.indices) {
+    const Vec3 d = scan.points[i] - out.centroid;
+    out.spread += d * d.transpose();
   }
   LocalFitSettings fit_settings = st.local_fit;
   fit_settings.threads = st.threads;
@@ -152,6 +282,16 @@ FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const
   // normal back. A turn about the normal (left undetermined by the fit) does not change it.
   out.measured_normal = out.fit.T_model_subset.linear().transpose() * flange.normal;
   return out;
+}
+
+// The median rms of the fitted flanges: the scan's noise as the fits see it (0: none fitted).
+double median_fit_rms(const SpringbackResult& result) {
+  std::vector<double> rms;
+  for (const FlangeFit& f : result.flanges)
+    if (f.fitted) rms.push_back(f.fit.rms_mm);
+  if (rms.empty()) return 0.0;
+  std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
+  return rms[rms.size() / 2];
 }
 
 // A curled wall's plane fit stays far above the noise, and rightly. The curl explains it when
@@ -176,12 +316,8 @@ bool curl_explains_fit(const FlangeShape& shape) {
 // Returns the Flange::id of every flange it rejected.
 std::vector<int> reject_poor_fits(SpringbackResult& result, const SpringbackSettings& st) {
   std::vector<int> rejected;
-  std::vector<double> rms;
-  for (const FlangeFit& f : result.flanges)
-    if (f.fitted) rms.push_back(f.fit.rms_mm);
-  if (rms.empty() || !(st.max_fit_rms_ratio > 0.0)) return rejected;
-  std::nth_element(rms.begin(), rms.begin() + static_cast<long>(rms.size() / 2), rms.end());
-  const double median = rms[rms.size() / 2];
+  const double median = median_fit_rms(result);
+  if (!(median > 0.0) || !(st.max_fit_rms_ratio > 0.0)) return rejected;
   constexpr double kUnconvergedRatio = 2.0;  // an unconverged fit must be this near the noise
   for (FlangeFit& f : result.flanges) {
     if (!f.fitted || curl_explains_fit(f.shape)) continue;
@@ -201,6 +337,47 @@ std::vector<int> reject_poor_fits(SpringbackResult& result, const SpringbackSett
     rejected.push_back(f.flange_id);
   }
   return rejected;
+}
+
+// How well a flange fit fixes its tilt about `axis` (radians, one standard deviation): the
+// slope error of a line fit, noise / sqrt(sum of squared distances across the bend). The noise
+// is the fit's rms, at least the part's median (a few points may fit a plane by chance).
+double tilt_sigma_rad(const FlangeFit& f, const Flange& flange, const Vec3& axis, double noise) {
+  const Vec3 across = flange.normal.cross(axis);
+  if (!(across.norm() > 1e-9)) return std::numeric_limits<double>::infinity();
+  const Vec3 u = across.normalized();
+  const double s = u.dot(f.spread * u);
+  return s > 0.0 ? std::max(f.fit.rms_mm, noise) / std::sqrt(s)
+                 : std::numeric_limits<double>::infinity();
+}
+
+// What a flange gives its bend's angle, for the status.
+std::string flange_figures(const FlangeFit& f, const Flange& flange, const Vec3& axis) {
+  const Vec3 across = flange.normal.cross(axis);
+  const double s =
+      across.norm() > 1e-9 ? across.normalized().dot(f.spread * across.normalized()) : 0.0;
+  // The width of an evenly covered strip with the same spread.
+  const double width =
+      std::sqrt(12.0 * s / static_cast<double>(std::max<std::size_t>(f.indices.size(), 1)));
+  return "flange " + std::to_string(f.flange_id) + " " + std::to_string(f.indices.size()) +
+         " points over " + std::to_string(width) + " mm across, rms " +
+         std::to_string(f.fit.rms_mm) + " mm";
+}
+
+// A measured bend whose flanges' points fix its angle less well than max_angle_sigma_deg
+// gives no angle: a short tab seen by few points, or a strip of a flange along the bend.
+void check_angle_sigma(BendMeasurement& m, const Flange& fa, const Flange& fb, const FlangeFit& a,
+                       const FlangeFit& b, double noise, const SpringbackSettings& st) {
+  if (!m.measured) return;
+  const Vec3 axis = m.axis_direction.normalized();
+  const double sa = tilt_sigma_rad(a, fa, axis, noise), sb = tilt_sigma_rad(b, fb, axis, noise);
+  m.angle_sigma_deg = std::sqrt(sa * sa + sb * sb) * kRadToDeg;
+  if (!(st.max_angle_sigma_deg > 0.0) || m.angle_sigma_deg <= st.max_angle_sigma_deg) return;
+  m.measured = false;
+  m.status = "bend " + std::to_string(m.bend_id) + " not measured: its flanges fix its angle to " +
+             std::to_string(m.angle_sigma_deg) + " deg (1 sigma), above max_angle_sigma_deg " +
+             std::to_string(st.max_angle_sigma_deg) + " (" + flange_figures(a, fa, axis) + "; " +
+             flange_figures(b, fb, axis) + ")";
 }
 
 // A closed hem keeps its figures from the fits, but is listed as not measurable.
@@ -309,16 +486,22 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
 
   // 1. Label the model samples by flange, leaving out a margin around the bends, and by bend
   //    zone.
-  auto labels = sample_labels(model, st.bend_margin_mm, st.threads);
+  const std::vector<double> margins = flange_margins(model, st);
+  auto labels = sample_labels(model, margins, st.threads);
   const BendZones zones = label_bend_zones(model, labels);
-  // 2. Assign the (thinned) scan points to flanges and zones by their nearest model sample.
+  // 2. Assign the (thinned) scan points to flanges and zones by their nearest model sample;
+  //    small flanges take more points from the full scan.
   const LocalFitTarget target(model);
   const auto order = thinned_in_space_order(scan, result.thinning_stride);
   auto assigned =
       assign_points(target, labels, seg.flanges.size() + zones.zones.size(), scan, order, st);
+  add_dense_points(target, labels, scan, result.thinning_stride, st, assigned, seg.flanges.size());
   // 3. Fit each flange locally to the whole model.
-  for (std::size_t f = 0; f < seg.flanges.size(); ++f)
+  for (std::size_t f = 0; f < seg.flanges.size(); ++f) {
     result.flanges.push_back(fit_flange(target, scan, seg.flanges[f], std::move(assigned[f]), st));
+    result.flanges.back().margin_mm = margins[f];
+  }
+  const double noise = median_fit_rms(result);
   // 4. Each bend from the relative rotation of its two flanges.
   const auto index_of = [&seg](int id) {
     const auto it = std::find_if(seg.flanges.begin(), seg.flanges.end(),
@@ -329,6 +512,8 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
     const std::size_t a = index_of(bend.flange_a), b = index_of(bend.flange_b);
     BendMeasurement m =
         measure_bend(bend, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b]);
+    check_angle_sigma(m, seg.flanges[a], seg.flanges[b], result.flanges[a], result.flanges[b],
+                      noise, st);
     mark_closed_hem(m, st);
     return m;
   };

@@ -35,11 +35,24 @@ struct BendShapeSettings {
 };
 
 struct SpringbackSettings {
-  LocalFitSettings local_fit;           ///< each flange's local best fit (threads: see below)
-  BendShapeSettings shape;              ///< flange shape, bend radius, angle along the bend
-  double bend_margin_mm = 2.0;          ///< flange samples this close to a bend are left out
+  LocalFitSettings local_fit;  ///< each flange's local best fit (threads: see below)
+  BendShapeSettings shape;     ///< flange shape, bend radius, angle along the bend
+  /// Flange samples this close to a bend are left out: at most this, less on a short flange
+  /// (bend_margin_fraction of its depth from its bends), never below min_bend_margin_mm.
+  double bend_margin_mm = 2.0;
+  double bend_margin_fraction = 0.2;    ///< of the flange's depth from its nearest bend axis
+  double min_bend_margin_mm = 0.5;      ///< the margin's floor (bend zone, noise, alignment)
   double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
-  int min_points_per_flange = 200;      ///< fewer: not fitted, its bends are not measured
+  /// Fewer points: not fitted, its bends are not measured. The floor of a plane fit with
+  /// outlier rejection; whether a fitted flange fixes its bend angle is max_angle_sigma_deg's.
+  int min_points_per_flange = 50;
+  /// A bend whose angle the two flanges' points fix less well than this (one standard
+  /// deviation, from each fit's noise and its points' spread across the bend) is not measured,
+  /// with its figures: a short tab, or one the scan sees little of. 0 = off.
+  double max_angle_sigma_deg = 0.015;
+  /// A flange with fewer thinned points than this takes more from the full scan (up to about
+  /// this many): thinning is for large flanges, a short tab needs every point. 0 = off.
+  std::int64_t dense_flange_points = 2000;
   /// A flange fit whose rms exceeds this x the median rms of the part's flange fits is not a
   /// plane of the scan (points of other faces, a skin it cannot see): not fitted, with its
   /// figures. The median is the scan's noise as the fits see it. 0 = off.
@@ -61,6 +74,9 @@ struct FlangeFit {
   std::string status;  ///< why it was not fitted, or empty
   LocalFitResult fit;
   Vec3 measured_normal = Vec3::Zero();  ///< normal of the fitted plane in the CAD frame
+  double margin_mm = 0.0;               ///< the bend margin its samples were labelled with
+  Vec3 centroid = Vec3::Zero();         ///< of its points (CAD frame)
+  Mat3 spread = Mat3::Zero();           ///< sum of (p - centroid)(p - centroid)^T, mm^2
   FlangeShape shape;                    ///< flatness, curl, twist (shape.measured: whether)
   bool has_bend_line = false;  ///< false: no bend orients it; curl and twist are not defined
   EdgeDeviation edge;          ///< its free edge (end flanges: one bend) against the CAD's
@@ -89,7 +105,10 @@ struct BendMeasurement {
   AxisAngle relative_rotation;  ///< flange b relative to flange a, CAD frame (paper §4)
   Vec3 measured_axis_direction = Vec3::Zero();  ///< line of the two fitted planes, CAD frame
   bool measured = false;                        ///< false when a flange could not be fitted
-  std::string status;                           ///< why it was not measured, or empty
+  /// One standard deviation of the measured angle from the fits' noise and their points'
+  /// spread across the bend (0 when not fitted).
+  double angle_sigma_deg = 0.0;
+  std::string status;  ///< why it was not measured, or empty
   /// The angle between the two flanges' fitted planes (paper section 4). It is the measured
   /// angle unless a flange is curled; then the measured angle is the one between the tangent
   /// planes at the flanges' ends next to the bend (NUMISHEET'93), and end_tangents is true.

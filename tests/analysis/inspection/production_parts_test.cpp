@@ -1,6 +1,7 @@
 // The production parts of ../shared/data/cad end to end: each part produced with a random
 // springback on every bend, posed at random (any rotation, up to 500 mm), laser-scanned from
-// one side in two passes tilted +-35 deg (200k points, sigma 0.02 mm), analysed by
+// one side in two passes tilted +-35 deg (200k points, sigma 0.02 mm; the springback cases
+// tilt them about a diagonal of the part's edges, so that every wall is seen), analysed by
 // run_inspection with the exact CAD distance, as the station loads a part. Checked against the
 // constructed truth: the result frame of the global fit, and every bend's springback.
 #include "tests/simulators/parts/production_parts.hpp"
@@ -8,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <map>
 #include <ostream>
 #include <random>
 #include <set>
@@ -23,28 +25,32 @@ using testing::FieldScenario;
 
 struct PartExpectation {
   std::string name;
-  // Bends the two tilted passes can measure: both flanges seen. The others face along the tilt
-  // axis (the scanner sees them edge-on) or are closed hems; they must say why they have no angle.
+  // Bends the two passes from above measure at least: both flanges seen. The others join a
+  // wall they do not see or are closed hems; they must say why they have no angle.
   int measurable_bends = 0;
   // The largest error of the result frame with no springback: rotation (deg), and shift of
   // the part's centroid (mm).
   double max_rotation_deg = 0.05;
   double max_shift_mm = 0.05;
-  double max_residual_mm = 0.1;  ///< the fit's residual to the surface, sigma 0.02 mm
+  double max_residual_mm = 0.1;   ///< the fit's residual to the surface, sigma 0.02 mm
+  int measurable_from_below = 0;  ///< bends the two passes from below measure at least
+  int measurable_noisy = 0;       ///< ... and the noisy scan
 };
 
 void PrintTo(const PartExpectation& part, std::ostream* os) { *os << part.name; }
 
 const std::vector<PartExpectation>& expectations() {
   static const std::vector<PartExpectation> parts = {
-      {"openamr-MMP.03.00.00.003_Motor_bracket.step", 4},
+      {"openamr-MMP.03.00.00.003_Motor_bracket.step", 4, 0.05, 0.05, 0.1, 4, 4},
       // Its main flange and the 34 deg flanges leave a rotation about the bend lines weakly
-      // fixed: 0.16 deg and 0.16 mm today (docs/alignment.md "Not yet right"); its bends are right
-      // to 0.01.
-      {"openamr-MMP.01.00.00.002_Cover_flange.step", 5, 0.2, 0.2, 0.15},
-      {"openamr-MMP.00.00.00.003_Side_panel.step", 4},
-      {"openamr-MMP.00.00.00.001_Front_panel.step", 2},
-      {"nema-17-bracket.step", 1}};
+      // fixed: 0.16 deg and 0.16 mm today (docs/alignment.md "Not done yet": the cause); its bends
+      // are right to 0.01.
+      {"openamr-MMP.01.00.00.002_Cover_flange.step", 5, 0.2, 0.2, 0.15, 5, 5},
+      // Two of its 16 bends join walls the passes from above do not see (0 points): they say so.
+      // From below and in the noisy scan its global fit is reported ambiguous (its half turn).
+      {"openamr-MMP.00.00.00.003_Side_panel.step", 14, 0.05, 0.05, 0.1, 14, 9},
+      {"openamr-MMP.00.00.00.001_Front_panel.step", 4, 0.05, 0.05, 0.1, 4, 4},
+      {"nema-17-bracket.step", 1, 0.05, 0.05, 0.1, 1, 1}};
   // Under the sanitizers (5-15x slower) one part: they look for memory errors and races.
   static const std::vector<PartExpectation> one(parts.begin(), parts.begin() + 1);
   return testing::kUnderSanitizer ? one : parts;
@@ -75,41 +81,88 @@ TEST_P(ProductionPart, ZeroSpringbackFitsThePose) {
   EXPECT_LE(run.report.global_fit().rms_residual(), part.max_residual_mm);
 }
 
-TEST_P(ProductionPart, SpringbackOfEveryBend) {
-  const PartExpectation& part = GetParam();
-  const auto& cad = parts::testing::loaded_part(part.name);
-  std::mt19937 rng(11);
+// The passes tilt about a diagonal of the part's edges: each of them sees the walls facing
+// two ways, so every wall of a box-like part is seen by one (tilted about an edge, the walls
+// along the tilt axis are edge-on: 12 of the side panel's 16 bends had no angle).
+constexpr double kTiltAxisDeg = 45.0;
+
+// Random springback 0.2-3 deg on every bend, as the issue asks.
+FieldScenario random_springback(const parts::CadPart& cad, std::uint32_t seed) {
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<double> springback(0.2, 3.0);
   FieldScenario sc;
   for (std::size_t i = 0; i < cad.model.segmentation.bends.size(); ++i)
     sc.springback_deg.push_back(springback(rng));
   sc.pose = testing::random_motion(rng, 500.0);
-  const FieldRun run = testing::run_field_case(cad, sc);
-  const auto& bends = run.report.bends();
+  sc.tilt_axis_deg = kTiltAxisDeg;
+  return sc;
+}
+
+struct BendCheck {
   int measured = 0;
-  double worst = 0.0;
+  double worst = 0.0;                ///< largest |springback error| of a measured bend, deg
+  std::map<int, double> springback;  ///< measured springback by bend id
+};
+
+// Every bend of the report against the produced part's truth: a closed hem listed as not
+// measurable and passing, a bend without an angle saying why, every measured bend within
+// `bound` of its constructed springback and judged by the verdict as its truth is (where the
+// truth is farther than `bound` from the limit).
+BendCheck check_bends(const FieldRun& run, double bound, const std::string& what) {
+  BendCheck out;
+  const auto& bends = run.report.bends();
   for (const parts::BendTruth& truth : run.bends) {
     const auto it = std::find_if(bends.begin(), bends.end(),
                                  [&](const v1::Bend& b) { return b.id() == truth.bend_id; });
-    ASSERT_NE(it, bends.end()) << "bend " << truth.bend_id;
+    EXPECT_NE(it, bends.end()) << what << " bend " << truth.bend_id;
+    if (it == bends.end()) continue;
     if (truth.hem) {
-      EXPECT_FALSE(it->measurable()) << "bend " << truth.bend_id << " is a closed hem";
-      EXPECT_TRUE(it->pass()) << "a closed hem never fails the part by itself";
+      EXPECT_FALSE(it->measurable()) << what << " bend " << truth.bend_id << " is a closed hem";
+      EXPECT_TRUE(it->pass()) << what << ": a closed hem never fails the part by itself";
     }
     if (!it->measured()) {
-      EXPECT_FALSE(it->status().empty()) << "bend " << truth.bend_id << " says why not";
+      EXPECT_FALSE(it->status().empty()) << what << " bend " << truth.bend_id << " says why not";
+      std::printf("  %s bend %d (%.1f deg): %s\n", what.c_str(), truth.bend_id,
+                  it->nominal_angle_deg(), it->status().c_str());
       continue;
     }
-    ++measured;
-    EXPECT_FALSE(it->end_tangents()) << "bend " << truth.bend_id << ": no flange is curled";
-    worst = std::max(worst, std::abs(it->springback_deg() - truth.springback_deg));
-    EXPECT_NEAR(it->springback_deg(), truth.springback_deg, 0.05) << "bend " << truth.bend_id;
+    ++out.measured;
+    out.springback[truth.bend_id] = it->springback_deg();
+    EXPECT_FALSE(it->end_tangents()) << what << " bend " << truth.bend_id << ": no flange curled";
+    const double error = std::abs(it->springback_deg() - truth.springback_deg);
+    out.worst = std::max(out.worst, error);
+    EXPECT_LE(error, bound) << what << " bend " << truth.bend_id << ": measured "
+                            << it->springback_deg() << ", truth " << truth.springback_deg;
+    const double limit = it->angle_tolerance_deg();
+    if (std::abs(std::abs(truth.springback_deg) - limit) > bound)
+      EXPECT_EQ(it->pass(), std::abs(truth.springback_deg) <= limit)
+          << what << " bend " << truth.bend_id << ": verdict against the limit " << limit;
   }
+  return out;
+}
+
+// A global fit that two orientations fit alike is reported ambiguous: its bends may belong to
+// the part turned over (the side panel's half turn), and the verdict must fail for it. False
+// then: the bends are not checked against the truth.
+bool fit_is_trusted(const FieldRun& run, const std::string& what) {
+  if (!run.report.global_fit().ambiguous()) return true;
+  std::printf("%s: the global fit is reported ambiguous (ratio %.3f), the part fails\n",
+              what.c_str(), run.report.global_fit().orientation_ambiguity());
+  EXPECT_FALSE(run.report.verdict().pass()) << what << ": an ambiguous fit never passes";
+  return false;
+}
+
+TEST_P(ProductionPart, SpringbackOfEveryBend) {
+  const PartExpectation& part = GetParam();
+  const auto& cad = parts::testing::loaded_part(part.name);
+  const FieldRun run = testing::run_field_case(cad, random_springback(cad, 11));
+  const BendCheck check = check_bends(run, 0.05, part.name);
   std::printf("%s: %d bends measured, worst springback error %.4f deg\n", part.name.c_str(),
-              measured, worst);
+              check.measured, check.worst);
   // The flanges are produced rigid: each flange of a measured bend is flat within the noise
   // (one skin of a solid: two passes may see both skins of a standing flange, a thickness
   // apart, and the shape is taken on one).
+  const auto& bends = run.report.bends();
   std::set<int> fitted;
   for (const auto& b : bends)
     if (b.measured()) fitted.insert({b.segment_a(), b.segment_b()});
@@ -118,7 +171,60 @@ TEST_P(ProductionPart, SpringbackOfEveryBend) {
     EXPECT_LE(seg.flatness_rms_mm(), 0.03) << "segment " << seg.id();
     EXPECT_FALSE(seg.has_curl_radius_mm()) << "segment " << seg.id();
   }
-  EXPECT_GE(measured, part.measurable_bends);
+  EXPECT_GE(check.measured, part.measurable_bends);
+}
+
+// Both skins of the sheet turn by the same angle at a bend: scanned from above and from below
+// (the scanner's view flipped), the same produced part gives every measured bend its
+// constructed springback, so the two sides agree. Accuracy, not memory: not under the
+// sanitizers (the code paths are SpringbackOfEveryBend's).
+TEST_P(ProductionPart, BothSidesGiveTheSameAngles) {
+  if (testing::kUnderSanitizer) GTEST_SKIP() << "accuracy test, run without sanitizers";
+  const PartExpectation& part = GetParam();
+  const auto& cad = parts::testing::loaded_part(part.name);
+  FieldScenario sc = random_springback(cad, 13);
+  const FieldRun top_run = testing::run_field_case(cad, sc);
+  sc.from_below = true;
+  const FieldRun bottom_run = testing::run_field_case(cad, sc);
+  if (!fit_is_trusted(top_run, part.name + " top") ||
+      !fit_is_trusted(bottom_run, part.name + " bottom"))
+    return;
+  const BendCheck top = check_bends(top_run, 0.05, "top");
+  const BendCheck bottom = check_bends(bottom_run, 0.05, "bottom");
+  double worst_pair = 0.0;
+  for (const auto& [id, sb] : bottom.springback)
+    if (top.springback.count(id))
+      worst_pair = std::max(worst_pair, std::abs(sb - top.springback.at(id)));
+  std::printf(
+      "%s: top %d bends (worst %.4f deg), bottom %d bends (worst %.4f deg), "
+      "largest top-bottom difference %.4f deg\n",
+      part.name.c_str(), top.measured, top.worst, bottom.measured, bottom.worst, worst_pair);
+  EXPECT_LE(worst_pair, 0.05);
+  EXPECT_GE(top.measured, part.measurable_bends);
+  EXPECT_GE(bottom.measured, part.measurable_from_below);
+}
+
+// The issue's noisy case: sigma 0.05 mm, 2 % outliers, 10 % of the seen area missing. Every
+// measured bend within 0.2 deg of its truth and judged right; the part fails (its springback
+// reaches 3 deg).
+TEST_P(ProductionPart, NoisyScanWithinTwoTenths) {
+  if (testing::kUnderSanitizer) GTEST_SKIP() << "accuracy test, run without sanitizers";
+  const PartExpectation& part = GetParam();
+  const auto& cad = parts::testing::loaded_part(part.name);
+  FieldScenario sc = random_springback(cad, 17);
+  sc.noise_mm = 0.05;
+  sc.outliers = 0.02;
+  sc.missing = 0.10;
+  const FieldRun run = testing::run_field_case(cad, sc);
+  if (!fit_is_trusted(run, part.name + " noisy")) return;
+  const BendCheck check = check_bends(run, 0.2, "noisy");
+  std::printf("%s noisy: %d bends measured, worst springback error %.4f deg\n", part.name.c_str(),
+              check.measured, check.worst);
+  EXPECT_GE(check.measured, part.measurable_noisy);
+  bool beyond = false;
+  for (const parts::BendTruth& truth : run.bends)
+    beyond = beyond || (!truth.hem && std::abs(truth.springback_deg) > 1.0 + 0.2);
+  if (beyond) EXPECT_FALSE(run.report.verdict().pass());
 }
 
 // As the station's laser driver delivers a scan: points only, the part facing the scanner

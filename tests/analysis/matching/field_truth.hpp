@@ -63,6 +63,10 @@ struct FieldScenario {
   double missing = 0.0;
   std::int64_t points = kFieldScanPoints;
   double tilt_deg = 35.0;  ///< two passes tilted about y (sees vertical walls)
+  /// The passes' tilt axis, turned this far from y about z: at 45 deg both passes see walls
+  /// facing along x and along y (about y, those facing along y are edge-on).
+  double tilt_axis_deg = 0.0;
+  bool from_below = false;  ///< the scanner below the part (looking up +z of the part frame)
   std::uint64_t seed = 1;
   /// false: the points alone, as the laser driver delivers them (the pipeline estimates normals
   /// toward its viewpoint, far above +z of the scan frame: the pose must keep the part facing
@@ -128,7 +132,10 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
   parts::LaserScan scan;
   const double tilt = sc.tilt_deg * std::numbers::pi / 180.0;
   for (int side : {1, -1}) {
-    ls.view_direction = Vec3(side * std::sin(tilt), 0.0, -std::cos(tilt));
+    const double axis = sc.tilt_axis_deg * std::numbers::pi / 180.0;
+    ls.view_direction =
+        Vec3(side * std::sin(tilt) * std::cos(axis), side * std::sin(tilt) * std::sin(axis),
+             (sc.from_below ? 1.0 : -1.0) * std::cos(tilt));
     ls.seed = sc.seed * 2 + static_cast<std::uint64_t>(side + 1);
     auto pass = parts::laser_scan(*part, ls);
     EXPECT_TRUE(pass) << pass.message();

@@ -218,6 +218,80 @@ TEST(Springback, FlangesWithTooFewPointsLeaveTheirBendsUnmeasured) {
   EXPECT_FALSE(measure_springback(bare, *scan).ok());
 }
 
+// Whether a flange's points fix its bend's angle follows from their spread across the bend
+// and the noise, not from their count: a strip of flange 2 along its bend (1 mm across, more
+// points than the old fixed minimum of 200) leaves the bend unmeasured with its figures.
+TEST(Springback, AStripAlongTheBendFixesNoAngle) {
+  const ProfileSpec spec = u_profile(30, 40, 90, 4);
+  const auto model = profile_part_model(spec, {.sample_count = 10000});
+  ASSERT_TRUE(model.ok());
+  ScanSimulationSettings st;
+  st.point_count = 40000;
+  const auto scan = simulate_scan(spec, {0.5, 1.0}, st);
+  ASSERT_TRUE(scan.ok());
+  const auto full = measure_springback(*model, *scan);
+  ASSERT_TRUE(full.ok()) << full.message();
+  ASSERT_TRUE(full->bends[1].measured) << full->bends[1].status;
+  EXPECT_NEAR(full->bends[1].springback_deg, 1.0, 0.05);
+  EXPECT_GT(full->bends[1].angle_sigma_deg, 0.0);
+  EXPECT_LE(full->bends[1].angle_sigma_deg, 0.015);
+  // Flange 2's points within 0.5 mm across of their centroid, the rest of the scan as it was.
+  const FlangeFit& f2 = full->flanges[2];
+  const Vec3 across = model->segmentation.flanges[2].normal.cross(
+      model->segmentation.bends[1].axis_direction.normalized());
+  std::vector<char> drop(scan->size(), 0);
+  std::size_t kept = 0;
+  for (std::uint32_t i : f2.indices) {
+    drop[i] = std::abs((scan->points[i] - f2.centroid).dot(across.normalized())) > 0.5;
+    kept += !drop[i];
+  }
+  PointCloud strip;
+  for (std::size_t i = 0; i < scan->size(); ++i)
+    if (!drop[i]) strip.points.push_back(scan->points[i]);
+  ASSERT_GT(kept, 200u);
+  const auto result = measure_springback(*model, strip);
+  ASSERT_TRUE(result.ok()) << result.message();
+  EXPECT_TRUE(result->bends[0].measured);
+  EXPECT_FALSE(result->bends[1].measured);
+  EXPECT_GT(result->bends[1].angle_sigma_deg, 0.015);
+  EXPECT_NE(result->bends[1].status.find("fix its angle"), std::string::npos)
+      << result->bends[1].status;
+  // Off: the strip's angle is given, however loosely fixed.
+  SpringbackSettings off;
+  off.max_angle_sigma_deg = 0.0;
+  const auto loose = measure_springback(*model, strip, off);
+  ASSERT_TRUE(loose.ok());
+  EXPECT_TRUE(loose->bends[1].measured);
+}
+
+// A scan thinned for speed leaves a small flange few points; it takes more from the full scan
+// (up to dense_flange_points), so its bend is fixed as well as the scan's density allows.
+TEST(Springback, SmallFlangesTakeTheFullScansPoints) {
+  const ProfileSpec spec = u_profile(30, 40, 90, 4);
+  const auto model = profile_part_model(spec, {.sample_count = 10000});
+  ASSERT_TRUE(model.ok());
+  ScanSimulationSettings st;
+  st.point_count = 40000;
+  const auto scan = simulate_scan(spec, {0.5, 1.0}, st);
+  ASSERT_TRUE(scan.ok());
+  SpringbackSettings thin;
+  thin.max_scan_points = 4000;  // stride 10
+  SpringbackSettings no_dense = thin;
+  no_dense.dense_flange_points = 0;
+  const auto dense = measure_springback(*model, *scan, thin);
+  const auto sparse = measure_springback(*model, *scan, no_dense);
+  ASSERT_TRUE(dense.ok() && sparse.ok());
+  for (std::size_t f = 0; f < dense->flanges.size(); ++f) {
+    EXPECT_GT(dense->flanges[f].indices.size() * 2, 3 * sparse->flanges[f].indices.size()) << f;
+    EXPECT_LE(dense->flanges[f].indices.size(), 3000u) << f;
+  }
+  for (std::size_t b = 0; b < dense->bends.size(); ++b) {
+    ASSERT_TRUE(dense->bends[b].measured) << dense->bends[b].status;
+    EXPECT_LT(dense->bends[b].angle_sigma_deg, sparse->bends[b].angle_sigma_deg) << b;
+    EXPECT_NEAR(dense->bends[b].springback_deg, b == 0 ? 0.5 : 1.0, 0.05) << b;
+  }
+}
+
 TEST(Springback, ResultDoesNotDependOnTheThreadCount) {
   const ProfileSpec spec = z_profile(30, 40, 70, 3);
   const auto model = profile_part_model(spec, {.sample_count = 10000});
