@@ -36,9 +36,13 @@ Expected<PointCloud> scan_of(const parts::ProducedPart& part) {
   ls.T_scan_part = Eigen::Translation3d(50.0, -20.0, 10.0) *
                    Eigen::AngleAxisd(20.0 * std::numbers::pi / 180.0, Vec3(1, 2, 3).normalized());
   const double tilt = 35.0 * std::numbers::pi / 180.0;
+  // Tilted about a diagonal of the part's edges, as in the production-parts test: every wall
+  // is seen, the short tabs too (about y the walls along y are edge-on).
+  const double diagonal = std::numbers::pi / 4.0;
   PointCloud out;
   for (int side : {1, -1}) {
-    ls.view_direction = Vec3(side * std::sin(tilt), 0.0, -std::cos(tilt));
+    ls.view_direction = Vec3(side * std::sin(tilt) * std::cos(diagonal),
+                             side * std::sin(tilt) * std::sin(diagonal), -std::cos(tilt));
     ls.seed = static_cast<std::uint64_t>(side + 2);
     auto pass = parts::laser_scan(part, ls);
     if (!pass) return pass.error();

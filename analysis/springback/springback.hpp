@@ -49,7 +49,7 @@ struct SpringbackSettings {
   /// A bend whose angle the two flanges' points fix less well than this (one standard
   /// deviation, from each fit's noise and its points' spread across the bend) is not measured,
   /// with its figures: a short tab, or one the scan sees little of. 0 = off.
-  double max_angle_sigma_deg = 0.015;
+  double max_angle_sigma_deg = 0.05;
   /// A flange with fewer thinned points than this takes more from the full scan (up to about
   /// this many): thinning is for large flanges, a short tab needs every point. 0 = off.
   std::int64_t dense_flange_points = 2000;

@@ -234,7 +234,7 @@ TEST(Springback, AStripAlongTheBendFixesNoAngle) {
   ASSERT_TRUE(full->bends[1].measured) << full->bends[1].status;
   EXPECT_NEAR(full->bends[1].springback_deg, 1.0, 0.05);
   EXPECT_GT(full->bends[1].angle_sigma_deg, 0.0);
-  EXPECT_LE(full->bends[1].angle_sigma_deg, 0.015);
+  EXPECT_LE(full->bends[1].angle_sigma_deg, 0.05);
   // Flange 2's points within 0.5 mm across of their centroid, the rest of the scan as it was.
   const FlangeFit& f2 = full->flanges[2];
   const Vec3 across = model->segmentation.flanges[2].normal.cross(
@@ -253,7 +253,7 @@ TEST(Springback, AStripAlongTheBendFixesNoAngle) {
   ASSERT_TRUE(result.ok()) << result.message();
   EXPECT_TRUE(result->bends[0].measured);
   EXPECT_FALSE(result->bends[1].measured);
-  EXPECT_GT(result->bends[1].angle_sigma_deg, 0.015);
+  EXPECT_GT(result->bends[1].angle_sigma_deg, 0.05);
   EXPECT_NE(result->bends[1].status.find("fix its angle"), std::string::npos)
       << result->bends[1].status;
   // Off: the strip's angle is given, however loosely fixed.
