@@ -283,7 +283,7 @@ TEST(Springback, SmallFlangesTakeTheFullScansPoints) {
   ASSERT_TRUE(dense.ok() && sparse.ok());
   for (std::size_t f = 0; f < dense->flanges.size(); ++f) {
     EXPECT_GT(dense->flanges[f].indices.size() * 2, 3 * sparse->flanges[f].indices.size()) << f;
-    EXPECT_LE(dense->flanges[f].indices.size(), 3000u) << f;
+    EXPECT_LE(dense->flanges[f].indices.size(), 4000u) << f;  // its own and about 2000 more
   }
   for (std::size_t b = 0; b < dense->bends.size(); ++b) {
     ASSERT_TRUE(dense->bends[b].measured) << dense->bends[b].status;
