@@ -178,7 +178,7 @@ std::vector<std::vector<std::uint32_t>> assign_points(
 // is fitted at the scan's own density (thinning is for the large flanges, whose planes are
 // fixed long before): every `every`-th scan point inside the flange's box (its labelled
 // samples' principal axes, widened by kDenseBoxMm), labelled like the thinned points, chosen so
-// the flange ends with about dense_flange_points. Few queries: only the small flanges' boxes.
+// about dense_flange_points more come. Few queries: only the small flanges' boxes.
 void add_dense_points(const LocalFitTarget& target, const std::vector<std::int32_t>& labels,
                       const PointCloud& scan, std::size_t stride, const SpringbackSettings& st,
                       std::vector<std::vector<std::uint32_t>>& assigned, std::size_t flanges) {

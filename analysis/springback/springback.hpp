@@ -50,8 +50,8 @@ struct SpringbackSettings {
   /// deviation, from each fit's noise and its points' spread across the bend) is not measured,
   /// with its figures: a short tab, or one the scan sees little of. 0 = off.
   double max_angle_sigma_deg = 0.05;
-  /// A flange with fewer thinned points than this takes more from the full scan (up to about
-  /// this many): thinning is for large flanges, a short tab needs every point. 0 = off.
+  /// A flange with fewer thinned points than this takes about this many more from the full
+  /// scan: thinning is for large flanges, a short tab needs every point. 0 = off.
   std::int64_t dense_flange_points = 2000;
   /// A flange fit whose rms exceeds this x the median rms of the part's flange fits is not a
   /// plane of the scan (points of other faces, a skin it cannot see): not fitted, with its
