@@ -115,7 +115,46 @@ DrawCloud make_draw_cloud(const analysis::PointCloud& cloud, double scale_mm,
   return out;
 }
 
-analysis::Expected<std::string> deviation_views_html(const DrawCloud& cloud,
+namespace {
+
+// A polyline through `points` in the view's pixels; nothing for fewer than two finite points.
+std::string polyline_svg(const google::protobuf::RepeatedPtrField<v1::Vec3>& points,
+                         const ViewProjection& view, const char* css_class) {
+  std::ostringstream coords;
+  int drawn = 0;
+  for (const v1::Vec3& p : points) {
+    const Vec3 v = to_vec(p);
+    if (!v.allFinite()) continue;
+    const Eigen::Vector2d px = view.to_pixel(v);
+    if (drawn++ > 0) coords << ' ';
+    coords << svg_number(px.x()) << ',' << svg_number(px.y());
+  }
+  if (drawn < 2) return "";
+  std::ostringstream svg;
+  svg << "<polyline class='" << css_class << "' points='" << coords.str() << "'/>";
+  return svg.str();
+}
+
+// Each measured free edge: the CAD edge (dashed) and the scan's edge, where a quality engineer
+// reads overhang or draw-in against the colours. Bounded like the bend labels.
+std::string free_edges_overlay(const v1::InspectionReport& report, const ViewProjection& view,
+                               const ReportSettings& settings) {
+  std::string overlay;
+  int drawn = 0;
+  for (const v1::Segment& segment : report.segments()) {
+    if (!segment.has_edge_deviation_mm() || drawn >= settings.max_bend_labels) continue;
+    const v1::EdgeDeviation& e = segment.edge_deviation_mm();
+    overlay += polyline_svg(e.cad_edge(), view, "cadedge");
+    overlay += polyline_svg(e.scan_edge(), view, "scanedge");
+    ++drawn;
+  }
+  return overlay;
+}
+
+}  // namespace
+
+analysis::Expected<std::string> deviation_views_html(const v1::InspectionReport& report,
+                                                     const DrawCloud& cloud,
                                                      const ReportSettings& settings) {
   if (cloud.points.empty()) return missing_picture(settings);
   constexpr ViewKind kKinds[] = {ViewKind::kTop, ViewKind::kFront, ViewKind::kSide,
@@ -127,7 +166,8 @@ analysis::Expected<std::string> deviation_views_html(const DrawCloud& cloud,
   const auto draw = [&](std::size_t first, std::size_t stride) {
     for (std::size_t i = first; i < kCount; i += stride) {
       const ViewProjection view = fit_view(cloud.points, kKinds[i], view_settings(settings));
-      svgs[i] = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings, "",
+      svgs[i] = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings,
+                         free_edges_overlay(report, view, settings),
                          std::string("deviation, ") + view_name(kKinds[i]) + " view");
     }
   };

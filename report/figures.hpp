@@ -43,8 +43,11 @@ analysis::Expected<std::string> view_svg(const std::vector<Vec3>& points,
                                          const ViewProjection& view, const ReportSettings& settings,
                                          const std::string& overlay, const std::string& label);
 
-/// Four <figure>s (top, front, side, isometric) coloured by deviation.
-analysis::Expected<std::string> deviation_views_html(const DrawCloud& cloud,
+/// Four <figure>s (top, front, side, isometric) coloured by deviation, with each measured free
+/// edge of `report` (segments[].edge_deviation_mm) drawn as two lines: the CAD edge and the
+/// scan's edge.
+analysis::Expected<std::string> deviation_views_html(const v1::InspectionReport& report,
+                                                     const DrawCloud& cloud,
                                                      const ReportSettings& settings);
 
 /// The isometric view with every bend axis drawn and labelled "B<id>" in its verdict colour.

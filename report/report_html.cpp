@@ -36,7 +36,7 @@ double color_scale_of(const v1::InspectionReport& report, const ReportSettings& 
 analysis::Expected<std::string> deviation_section(const v1::InspectionReport& report,
                                                   const DrawCloud& cloud, double scale_mm,
                                                   const ReportSettings& settings) {
-  auto views = deviation_views_html(cloud, settings);
+  auto views = deviation_views_html(report, cloud, settings);
   if (!views) return views.error();
   return "<section id='deviation'><h2>Surface deviation</h2><div class='grid2'>" +
          deviation_table(report.deviation()) +
@@ -45,7 +45,8 @@ analysis::Expected<std::string> deviation_section(const v1::InspectionReport& re
          std::to_string(cloud.points.size()) +
          " points of the scan. Green lies within the tolerance; blue is below the CAD surface "
          "(against its outward normal), red above. A flange coloured blue at one end and red at "
-         "the other is turned: look at the bend table.</p></div></div>" +
+         "the other is turned: look at the bend table. A measured free edge is drawn twice: "
+         "where the CAD puts it (dashed) and where the scan's edge is (purple).</p></div></div>" +
          "<div class='colorbar-wrap'>" + color_bar_svg(scale_mm, tolerance_of(report), 1000) +
          "</div>" + *views + "</section>";
 }

@@ -56,6 +56,8 @@ svg polyline.s1 { fill: none; stroke: #2c5fb8; stroke-width: 1.8; } svg circle.s
 svg polyline.s2 { fill: none; stroke: #c0392b; stroke-width: 1.8; } svg circle.s2 { fill: #c0392b; }
 svg .triad { font-size: 10px; font-weight: 700; }
 svg line.axis { stroke-width: 3; stroke-linecap: round; }
+svg polyline.cadedge { fill: none; stroke: #222; stroke-width: 2; stroke-dasharray: 6 4; }
+svg polyline.scanedge { fill: none; stroke: #8e24aa; stroke-width: 2.5; }
 svg line.axis.ok { stroke: var(--pass); } svg line.axis.ng { stroke: var(--fail); }
 svg line.axis.nm { stroke: var(--nm); stroke-dasharray: 5 4; }
 svg .blabel circle { stroke: #fff; stroke-width: 1.5; }

@@ -32,6 +32,8 @@ void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
   out.set_across_mean(e.across_mean_mm);
   out.set_across_min(e.across_min_mm);
   out.set_across_max(e.across_max_mm);
+  for (const Vec3& p : e.cad_edge) to_proto(p, *out.add_cad_edge());
+  for (const Vec3& p : e.scan_edge) to_proto(p, *out.add_scan_edge());
 }
 
 // The angle along the bend, the end-tangent definition and the measured radius.

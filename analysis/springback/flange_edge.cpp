@@ -170,6 +170,11 @@ EdgeDeviation measure_free_edge(const PartModel& model, const Flange& flange,
     result.in_plane_max_mm = std::max(result.in_plane_max_mm, in_plane);
     result.across_min_mm = std::min(result.across_min_mm, across);
     result.across_max_mm = std::max(result.across_max_mm, across);
+    const auto point = [&](double s, double h) {
+      return Vec3(frame.origin + out * s * frame.u + strip.centre * frame.d + h * frame.n);
+    };
+    result.cad_edge.push_back(point(strip.cad_s, strip.cad_h));
+    result.scan_edge.push_back(point(edge, strip.cad_h + across));
     ++result.strips;
   }
   // Every strip must see the edge: a strip the scan does not reach (occlusion, a missing area)

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "analysis/core/part_model.hpp"
 #include "analysis/springback/flange_shape.hpp"
@@ -39,6 +40,9 @@ struct EdgeDeviation {
   int strips = 0;
   double in_plane_mean_mm = 0.0, in_plane_min_mm = 0.0, in_plane_max_mm = 0.0;
   double across_mean_mm = 0.0, across_min_mm = 0.0, across_max_mm = 0.0;
+  /// At each strip's centre, in the frame of the scan points given (the result frame): where
+  /// the CAD edge is and where the scan's edge is. The report draws them on the deviation map.
+  std::vector<Vec3> cad_edge, scan_edge;
 };
 
 /// The free edge of `flange` (the side away from `bend_axis_point`, its only bend's axis), from

@@ -91,6 +91,25 @@ TEST_F(HtmlReport, ShowsTheAngleAlongTheBendAndTheFlangeShape) {
             std::string::npos);
 }
 
+// The fixture's one measured free edge, drawn on each of the four deviation views: the CAD edge
+// and the scan's edge, three strip centres each.
+TEST_F(HtmlReport, DrawsTheFreeEdgeOnEveryDeviationView) {
+  const auto section = html_->substr(html_->find("<section id='deviation'>"));
+  const std::string deviation = section.substr(0, section.find("</section>"));
+  const auto count = [&](const std::string& needle) {
+    std::size_t n = 0;
+    for (auto at = deviation.find(needle); at != std::string::npos;
+         at = deviation.find(needle, at + 1))
+      ++n;
+    return n;
+  };
+  EXPECT_EQ(count("<polyline class='cadedge' points='"), 4u);
+  EXPECT_EQ(count("<polyline class='scanedge' points='"), 4u);
+  const auto at = deviation.find("<polyline class='scanedge' points='");
+  const std::string points = deviation.substr(at, deviation.find("'/>", at) - at);
+  EXPECT_EQ(std::count(points.begin(), points.end(), ','), 3) << points;
+}
+
 TEST_F(HtmlReport, EscapesEveryTextFromTheReport) {
   EXPECT_NE(html_->find("HAT-7 &lt;rev&amp;B&gt;"), std::string::npos);
   EXPECT_EQ(html_->find("HAT-7 <rev"), std::string::npos);

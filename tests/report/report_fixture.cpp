@@ -120,6 +120,14 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
       edge->set_across_mean(-0.52);
       edge->set_across_min(-0.55);
       edge->set_across_max(-0.49);
+      // Where the edge is drawn: the path's start, 0.31 mm beyond it and 0.52 mm low.
+      const auto [p, n] = at_length(path, 0.0);
+      const Eigen::Vector2d out = -(at_length(path, 1.0).first - p).normalized();
+      for (int k = 0; k < 3; ++k) {
+        const double y = (k + 0.5) * kWidthMm / 3.0;
+        *edge->add_cad_edge() = vec(parts::profile_to_3d(p, y));
+        *edge->add_scan_edge() = vec(parts::profile_to_3d(p + 0.31 * out - 0.52 * n, y));
+      }
     }
   }
   // Compensation: opposite of the deviation field at 60 control points along the profile.

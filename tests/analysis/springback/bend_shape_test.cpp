@@ -283,6 +283,20 @@ TEST(BendShape, FreeEdgeInPlaneAndAcrossWithin005mm) {
       const EdgeDeviation& e = result->flanges[last ? 4 : 0].edge;
       ASSERT_TRUE(e.measured) << "flange " << (last ? 4 : 0);
       EXPECT_EQ(e.strips, 6);
+      // The drawn edges (report): at each strip's centre, the CAD edge on the CAD, and the
+      // scan's edge where the produced part's edge is, across and along the sheet.
+      ASSERT_EQ(e.cad_edge.size(), 6u);
+      ASSERT_EQ(e.scan_edge.size(), 6u);
+      for (std::size_t k = 0; k < 6; ++k) {
+        const double y = e.cad_edge[k].y();
+        EXPECT_LT((e.cad_edge[k] - profile_to_3d(last ? n.end : n.start, y)).norm(), 1e-6);
+        const auto produced = shaped_section(spec, shape, y);
+        ASSERT_TRUE(produced.ok());
+        const Vec3 made =
+            T_cad_part * profile_to_3d(last ? produced->back().end : produced->front().start, y);
+        EXPECT_NEAR((e.scan_edge[k] - made).dot(out), 0.0, 0.05) << "strip " << k;
+        EXPECT_NEAR((e.scan_edge[k] - made).dot(normal), 0.0, 0.05) << "strip " << k;
+      }
       const double errors[] = {e.in_plane_min_mm - in_truth[0], e.in_plane_mean_mm - in_mean,
                                e.in_plane_max_mm - in_truth[1], e.across_min_mm - across_truth[0],
                                e.across_mean_mm - across_mean,  e.across_max_mm - across_truth[1]};
