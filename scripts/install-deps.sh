@@ -25,7 +25,8 @@ packages=(
 if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
   packages+=(mbpoll python3-scipy python3-numpy)
   # The third-party PLC client test (tests/daemon/pymodbus_plc.py): Debian 12's pymodbus 3.0.
-  packages+=(python3-pymodbus)
+  # Its client imports serial_asyncio, which Debian only recommends (we install without them).
+  packages+=(python3-pymodbus python3-serial-asyncio)
   # The HTML report is checked in a real browser (tests/report/browser_test.cpp).
   packages+=(chromium)
   # Results to the plant over MQTT: a real broker, a third-party subscriber, test certificates.
