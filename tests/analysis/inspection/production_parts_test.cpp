@@ -134,9 +134,10 @@ BendCheck check_bends(const FieldRun& run, double bound, const std::string& what
     EXPECT_LE(error, bound) << what << " bend " << truth.bend_id << ": measured "
                             << it->springback_deg() << ", truth " << truth.springback_deg;
     const double limit = it->angle_tolerance_deg();
-    if (std::abs(std::abs(truth.springback_deg) - limit) > bound)
+    if (std::abs(std::abs(truth.springback_deg) - limit) > bound) {
       EXPECT_EQ(it->pass(), std::abs(truth.springback_deg) <= limit)
           << what << " bend " << truth.bend_id << ": verdict against the limit " << limit;
+    }
   }
   return out;
 }
@@ -224,7 +225,9 @@ TEST_P(ProductionPart, NoisyScanWithinTwoTenths) {
   bool beyond = false;
   for (const parts::BendTruth& truth : run.bends)
     beyond = beyond || (!truth.hem && std::abs(truth.springback_deg) > 1.0 + 0.2);
-  if (beyond) EXPECT_FALSE(run.report.verdict().pass());
+  if (beyond) {
+    EXPECT_FALSE(run.report.verdict().pass());
+  }
 }
 
 // As the station's laser driver delivers a scan: points only, the part facing the scanner
