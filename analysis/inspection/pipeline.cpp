@@ -267,9 +267,10 @@ Expected<Transform> result_frame(const PointCloud& scan, const Transform& T_best
     alignment_to_proto(T_best, nullptr, out);
     return T_best;
   }
-  const bool normals = scan.normals.size() == scan.size();
-  auto datum = align_to_datums(scan.points, normals ? scan.normals : std::vector<Vec3>{}, T_best,
-                               model, settings);
+  // By reference: the conditional of a vector and a temporary would copy a 1M-point scan's normals.
+  static const std::vector<Vec3> kNoNormals;
+  const std::vector<Vec3>& normals = scan.normals.size() == scan.size() ? scan.normals : kNoNormals;
+  auto datum = align_to_datums(scan.points, normals, T_best, model, settings);
   if (!datum) return datum.error();
   alignment_to_proto(T_best, &*datum, out);
   return datum->T_cad_scan;
