@@ -56,12 +56,18 @@ struct VtkMessages {
   }
 };
 
-// The vertices some triangle uses, in input order. Only these go to VTK: it derives its
-// geometric tolerance from the bounds of all the points it is given, used or not (below).
-std::vector<std::uint32_t> used_vertices(const TriangleMesh& mesh) {
+// Per vertex: 1 if some triangle uses it.
+std::vector<std::uint8_t> used_mask(const TriangleMesh& mesh) {
   std::vector<std::uint8_t> used(mesh.vertices.size(), 0);
   for (const auto& t : mesh.triangles)
     for (std::uint32_t v : t) used[v] = 1;
+  return used;
+}
+
+// The vertices some triangle uses, in input order. Only these go to VTK: it derives its
+// geometric tolerance from the bounds of all the points it is given, used or not (below).
+std::vector<std::uint32_t> used_vertices(const TriangleMesh& mesh) {
+  const std::vector<std::uint8_t> used = used_mask(mesh);
   std::vector<std::uint32_t> out;
   for (std::uint32_t i = 0; i < mesh.vertices.size(); ++i)
     if (used[i]) out.push_back(i);
@@ -165,9 +171,7 @@ Expected<DecimationResult> from_vtk(vtkPolyData& out, const TriangleMesh& in) {
 // Vertices no triangle uses pass through: they are scan points the decimation has no
 // neighbourhood for, not surface it may simplify.
 void keep_isolated(const TriangleMesh& in, DecimationResult& result) {
-  std::vector<std::uint8_t> used(in.vertices.size(), 0);
-  for (const auto& t : in.triangles)
-    for (std::uint32_t v : t) used[v] = 1;
+  const std::vector<std::uint8_t> used = used_mask(in);
   for (std::uint32_t i = 0; i < in.vertices.size(); ++i) {
     if (used[i]) continue;
     ++result.isolated_vertices;
