@@ -2,16 +2,14 @@
 # Runs every springscan test: installs what is missing, builds (Release, incremental), runs CTest.
 #   scripts/test.sh             the Release build
 #   scripts/test.sh sanitize    the same suite under ASan + UBSan
-#   scripts/test.sh tsan        the analysis and daemon tests (HIL included) under ThreadSanitizer
+#   scripts/test.sh tsan        the analysis and daemon tests (HIL included) under ThreadSanitizer,
+#                               without the accuracy sweeps
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 kind=${1:-release}
 "$root/scripts/install-deps.sh"
 "$root/scripts/build.sh" "$kind"
 select=()
-tsan_sweeps='^(GlobalFit\.|Orientation\.|Profiles/SpringbackAccuracy\.|Parts/FieldAccuracy\.'
-tsan_sweeps+='|BendShape\.|Springback\.Repeated|Profiles/BoundaryFit\.|Openamr/DatumPart\.'
-tsan_sweeps+='|Openamr/ProductionPart\.(ZeroSpringback|PointsOnly))'
 case "$kind" in
   sanitize) dir="$root/build-asan" ;;
   # build.sh tsan builds only the analysis and daemon test executables: their CTest labels.
@@ -19,7 +17,10 @@ case "$kind" in
   # run the same parallel stages as the pipeline, boundary and production tests kept here, 5-15x
   # slower, and were half of CI's TSan stage. The release suite runs them all.
   tsan) dir="$root/build-tsan"
-        select=(-L '^(analysis|daemon)$' -E "$tsan_sweeps") ;;
+        sweeps='^(GlobalFit\.|Orientation\.|Profiles/SpringbackAccuracy\.|Parts/FieldAccuracy\.'
+        sweeps+='|BendShape\.|Springback\.Repeated|Profiles/BoundaryFit\.|Openamr/DatumPart\.'
+        sweeps+='|Openamr/ProductionPart\.(ZeroSpringback|PointsOnly))'
+        select=(-L '^(analysis|daemon)$' -E "$sweeps") ;;
   *) dir="$root/build" ;;
 esac
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
