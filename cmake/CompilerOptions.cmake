@@ -9,20 +9,41 @@ endfunction()
 
 # The sanitizer build instruments every target, including generated protobuf code, so it is
 # applied to the whole build through these two variables rather than per target.
-# The fuzz build (clang): coverage instrumentation and ASan + UBSan everywhere, libFuzzer's
-# main only in the fuzz targets (tests/fuzz/CMakeLists.txt).
-if(SPRINGSCAN_FUZZ)
-  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-omit-frame-pointer
-                      -fno-sanitize-recover=undefined)
-  add_link_options(-fsanitize=address,undefined)
-endif()
-
 if(SPRINGSCAN_SANITIZE)
   set(SPRINGSCAN_SANITIZER_FLAGS -fsanitize=address,undefined -fno-omit-frame-pointer
                                  -fno-sanitize-recover=undefined)
   add_compile_options(${SPRINGSCAN_SANITIZER_FLAGS})
   add_link_options(${SPRINGSCAN_SANITIZER_FLAGS})
 endif()
+
+# The libFuzzer targets of tests/fuzz (clang) live in the ASan + UBSan build beside the tests
+# (scripts/build.sh sanitize), so CI compiles the project under ASan once, not twice. Coverage
+# instrumentation (fuzzer-no-link) goes only on the code that parses untrusted bytes, through
+# springscan_fuzz_coverage(): it is what guides the fuzzer, and instrumenting the whole analysis
+# would slow every sanitizer test for nothing.
+if(SPRINGSCAN_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    message(FATAL_ERROR "SPRINGSCAN_FUZZ needs clang (libFuzzer): CXX=clang++")
+  endif()
+  if(NOT SPRINGSCAN_SANITIZE)
+    message(FATAL_ERROR "SPRINGSCAN_FUZZ needs SPRINGSCAN_SANITIZE (the fuzzers run under ASan)")
+  endif()
+endif()
+
+# springscan_fuzz_coverage(TARGET [SOURCES file...]): coverage instrumentation for libFuzzer on
+# all of TARGET's sources, or only on the SOURCES given (in the calling directory). No-op
+# unless SPRINGSCAN_FUZZ.
+function(springscan_fuzz_coverage target)
+  if(NOT SPRINGSCAN_FUZZ)
+    return()
+  endif()
+  cmake_parse_arguments(PARSE_ARGV 1 arg "" "" "SOURCES")
+  if(arg_SOURCES)
+    set_property(SOURCE ${arg_SOURCES} APPEND PROPERTY COMPILE_OPTIONS -fsanitize=fuzzer-no-link)
+  else()
+    target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)
+  endif()
+endfunction()
 
 # ThreadSanitizer, likewise for the whole build. It cannot share a process with
 # AddressSanitizer, hence a build of its own (scripts/build.sh tsan, build-tsan/).

@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# Runs a libFuzzer target of tests/fuzz for a while (clang, ASan + UBSan, build in build-fuzz/).
+# Runs a libFuzzer target of tests/fuzz for a while. The targets are built in the ASan + UBSan
+# build (clang, build-asan/, scripts/build.sh sanitize), the tree the sanitizer suite uses.
 #   scripts/fuzz.sh TARGET SECONDS     TARGET: point_files device_frames modbus_request
 #                                              daemon_config report_pb, or all
-# The corpus grows in build-fuzz/corpus/TARGET (seeded from tests/fuzz/corpus/TARGET); a crash
-# is written to build-fuzz/findings/TARGET/ and the script exits non-zero. To keep a finding as
-# a test, copy the input into tests/fuzz/corpus/TARGET/ (the replay test runs it ever after).
+# The corpus grows in build-asan/fuzz/corpus/TARGET (seeded from tests/fuzz/corpus/TARGET); a
+# crash is written to build-asan/fuzz/findings/TARGET/ and the script exits non-zero. To keep a
+# finding as a test, copy the input into tests/fuzz/corpus/TARGET/ (the replay test runs it ever
+# after).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 targets=(point_files device_frames modbus_request daemon_config report_pb)
@@ -12,15 +14,9 @@ target=${1:?usage: scripts/fuzz.sh TARGET SECONDS}
 seconds=${2:?usage: scripts/fuzz.sh TARGET SECONDS}
 [[ "$target" == all ]] || targets=("$target")
 "$root/scripts/install-deps.sh"
-dir="$root/build-fuzz"
-if [[ ! -f "$dir/CMakeCache.txt" ]]; then
-  launcher=()
-  if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
-  CC=clang CXX=clang++ cmake -S "$root" -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    -DSPRINGSCAN_FUZZ=ON -DSPRINGSCAN_BUILD_BENCHMARKS=OFF -DSPRINGSCAN_BUILD_SIMULATORS=OFF \
-    "${launcher[@]}" >/dev/null
-fi
-cmake --build "$dir" --parallel "$(nproc)" --target "${targets[@]/#/fuzz_}"
+"$root/scripts/build.sh" sanitize "${targets[@]/#/fuzz_}"
+build="$root/build-asan"
+dir="$build/fuzz"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
@@ -31,7 +27,7 @@ run_one() {
   mkdir -p "$corpus" "$findings" "$dir/logs"
   cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/" 2>/dev/null || true
   # rss_limit: hostile sizes must never make a parser allocate past what its bytes can hold.
-  "$dir/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -rss_limit_mb=2048 \
+  "$build/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -rss_limit_mb=2048 \
     -timeout=10 -max_len=65536 -print_final_stats=1 -artifact_prefix="$findings/" 2>&1 |
     grep -E '^(#[0-9]+.*(DONE|pulse)|stat::|==[0-9]+==|SUMMARY|Done|INFO: seed)' \
       >"$dir/logs/$t.log" || true
