@@ -9,7 +9,7 @@
 
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
-#include "analysis/matching/part_motion.hpp"
+#include "analysis/matching/field_prediction.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -18,226 +18,6 @@ constexpr std::uint32_t kNoScan = std::numeric_limits<std::uint32_t>::max();
 // On a solid, a scan normal more than 60 deg from the CAD normal expected where the scan point
 // lies belongs to another face: a sheet edge beside a skin is at 90 deg, the far skin at 180.
 constexpr double kMinNormalCosine = 0.5;
-
-// The predicted motion of every control point (step 1).
-struct Prediction {
-  std::vector<Transform> motion;  // T_result_cad of the material at the point
-  std::vector<int> bend;          // bend index when the point lies in a bend zone, else -1
-  std::vector<bool> guessed;      // the motion rests on an unmeasured bend (motion_measured)
-  std::vector<Vec3> curvature;    // other faces: (a, b, c) of the CAD surface's height
-                                  // h = (a x^2 + 2 b x y + c y^2) / 2 over the tangent plane
-};
-
-// The tangent basis of a normal in which Prediction::curvature is given.
-void tangent_basis(const Vec3& n, Vec3& u, Vec3& v) {
-  u = n.unitOrthogonal();
-  v = n.cross(u);
-}
-
-// The CAD surface's second-order shape at a control point of a curved face of neither flange
-// nor bend (a hole wall, a rounded corner; a bend zone's residual is radial already), from the
-// exact normals of that face's samples within 3 mm: the tangent part of a sample normal at
-// tangent offset t is -K t. Over a 1.5 mm support on a 5 mm hole the surface leaves the tangent
-// plane by 0.2 mm, which the normal offset would otherwise average in.
-Vec3 face_curvature(const FieldRefinementInput& in, const KdTree& samples, std::size_t i,
-                    std::vector<Neighbor>& near) {
-  const Vec3& m = in.model_points[i];
-  const Vec3& n = in.model_normals[i];
-  Vec3 u, v;
-  tangent_basis(n, u, v);
-  samples.radius(m, 3.0, near);
-  Mat3 A = 1e-3 * Mat3::Identity();  // a ridge: a narrow wall leaves c barely determined
-  Vec3 rhs = Vec3::Zero();
-  for (const Neighbor& k : near) {
-    if ((*in.model_sample_faces)[k.index] != in.model_faces[i]) continue;
-    const Vec3 d = in.model_samples[k.index] - m;
-    const double x = u.dot(d), y = v.dot(d);
-    const Vec3& ns = (*in.model_sample_normals)[k.index];
-    // n_u = -(a x + b y), n_v = -(b x + c y)
-    const Vec3 ju(x, y, 0.0), jv(0.0, x, y);
-    A += ju * ju.transpose() + jv * jv.transpose();
-    rhs -= ju * u.dot(ns) + jv * v.dot(ns);
-  }
-  return A.ldlt().solve(rhs);
-}
-
-// Without a segmentation: the matching's displacement, Gaussian-averaged over the pairs within
-// three median spacings (the pairs' along-surface scatter averages out).
-Transform smoothed_seed(const DeformationField& raw, const KdTree& anchors, double sigma,
-                        const Vec3& p, std::vector<Neighbor>& near) {
-  anchors.radius(p, 3.0 * sigma, near);
-  Vec3 sum = Vec3::Zero();
-  double weight = 0.0;
-  for (const Neighbor& n : near) {
-    const double w = std::exp(-n.squared_distance / (2.0 * sigma * sigma));
-    sum += w * raw.vectors[n.index].displacement();
-    weight += w;
-  }
-  Transform T = Transform::Identity();
-  if (weight > 0.0) T.pretranslate(sum / weight);
-  return T;
-}
-
-double median_spacing(const std::vector<Vec3>& points) {
-  if (points.size() < 2) return 1.0;
-  const KdTree tree(points);
-  std::vector<double> d;
-  std::vector<Neighbor> two;
-  for (const Vec3& p : points) {
-    tree.knn(p, 2, two);
-    if (two.size() == 2) d.push_back(std::sqrt(two[1].squared_distance));
-  }
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return std::max(d[d.size() / 2], 1e-6);
-}
-
-// One end of a point set along d: the points are uniform in d near a straight edge, so the edge
-// lies past the band [q - L, q) of the 99.9 % quantile q by the tail's count over the density
-// of the band before it. Averaged over every laser line that crosses the edge, which the
-// extreme point alone (quantised by the point spacing) is not.
-double edge_along(std::vector<double>& s, bool upper) {
-  constexpr double kBand = 3.0;  // mm
-  const std::size_t n = s.size();
-  if (upper)
-    for (double& v : s) v = -v;
-  std::sort(s.begin(), s.end());
-  const double q = s[n / 1000];
-  std::size_t tail = 0, band = 0;
-  for (const double v : s) {
-    if (v < q + kBand)
-      ++tail;
-    else if (v < q + 2.0 * kBand)
-      ++band;
-  }
-  double edge = s.front();
-  if (band > 10) edge = q + kBand - static_cast<double>(tail) * kBand / static_cast<double>(band);
-  if (upper)
-    for (double& v : s) v = -v;
-  return upper ? -edge : edge;
-}
-
-// The sheet's mid-line along d from its two edges, edge by edge in strips across d (5 mm
-// cells of the plane normal to d) and the median over the strips: a missing area or a cut-out
-// at one edge moves a few strips only. At most ~200k points (a fixed stride) take part.
-double mid_along(const std::vector<Vec3>& points, const Vec3& d) {
-  constexpr double kStrip = 5.0;  // mm
-  const Vec3 u = d.unitOrthogonal(), v = d.cross(u);
-  const std::size_t stride = std::max<std::size_t>(1, points.size() / 200000);
-  std::unordered_map<std::int64_t, std::vector<double>> strips;
-  for (std::size_t j = 0; j < points.size(); j += stride) {
-    const auto a = static_cast<std::int64_t>(std::floor(u.dot(points[j]) / kStrip));
-    const auto b = static_cast<std::int64_t>(std::floor(v.dot(points[j]) / kStrip));
-    strips[(a << 32) ^ (b & 0xffffffff)].push_back(d.dot(points[j]));
-  }
-  std::vector<double> lo, hi;
-  for (auto& [key, s] : strips) {
-    if (s.size() < 2000 / stride + 200) continue;
-    lo.push_back(edge_along(s, false));
-    hi.push_back(edge_along(s, true));
-  }
-  if (lo.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const auto median = [](std::vector<double>& x) {
-    std::nth_element(x.begin(), x.begin() + static_cast<long>(x.size() / 2), x.end());
-    return x[x.size() / 2];
-  };
-  return 0.5 * (median(lo) + median(hi));
-}
-
-// The CAD's extent along d: its samples are dense and reach the edges (no noise, no lines).
-double extent_mid(const std::vector<Vec3>& points, const Vec3& d) {
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-  for (const Vec3& p : points) lo = std::min(lo, d.dot(p)), hi = std::max(hi, d.dot(p));
-  return points.empty() ? 0.0 : 0.5 * (lo + hi);
-}
-
-// Faces of neither flange nor bend (sheet edges, hole walls, the end faces of a bend zone): the
-// motion of the material they bound at the point itself, the nearest flange or bend sample's
-// motion_at the control point (in a bend zone's end face: the bend's turn at the point's own
-// angle, which the nearest bend control point, up to w away, does not have). Without sample
-// faces, the nearest control point of a flange or bend.
-void place_other_faces(const FieldRefinementInput& in, const PartMotion& motion,
-                       const std::vector<bool>& known, const std::vector<Vec3>& known_points,
-                       const std::vector<std::uint32_t>& known_index, Prediction& out) {
-  std::vector<Vec3> material;
-  std::vector<int> material_face;
-  const std::vector<int>* faces = in.model_sample_faces;
-  if (faces && faces->size() == in.model_samples.size()) {
-    for (std::size_t k = 0; k < faces->size(); ++k) {
-      const int f = (*faces)[k];
-      if (f < 0 || static_cast<std::size_t>(f) >= motion.face_flange.size()) continue;
-      const auto face = static_cast<std::size_t>(f);
-      if (motion.face_flange[face] < 0 && motion.face_bend[face] < 0) continue;
-      material.push_back(in.model_samples[k]);
-      material_face.push_back(f);
-    }
-  }
-  const KdTree samples(material);
-  const KdTree controls(known_points);
-  const bool shaped = faces && faces->size() == in.model_samples.size() &&
-                      in.model_sample_normals &&
-                      in.model_sample_normals->size() == in.model_samples.size();
-  const KdTree all_samples(shaped ? in.model_samples : std::vector<Vec3>{});
-  std::vector<Neighbor> near_samples;
-  for (std::size_t i = 0; i < known.size(); ++i) {
-    if (known[i]) continue;
-    const Vec3& p = in.model_points[i];
-    if (shaped) out.curvature[i] = face_curvature(in, all_samples, i, near_samples);
-    const auto near = samples.nearest(p);
-    if (near && motion_at(motion, in.segmentation, p, material_face[near->index], out.motion[i])) {
-      out.guessed[i] = !motion_measured(motion, in.segmentation, material_face[near->index]);
-    } else {
-      const std::uint32_t k = known_index[controls.nearest(p)->index];
-      out.motion[i] = out.motion[k];
-      out.guessed[i] = out.guessed[k];
-    }
-  }
-}
-
-Prediction predict(const DeformationField& raw, const FieldRefinementInput& in) {
-  const std::size_t n = in.model_points.size();
-  Prediction out;
-  out.motion.assign(n, Transform::Identity());
-  out.bend.assign(n, -1);
-  out.guessed.assign(n, false);
-  out.curvature.assign(n, Vec3::Zero());
-  PartMotion motion;
-  if (in.springback)
-    motion = part_motion(in.segmentation, *in.springback, in.model_points, in.model_normals,
-                         in.model_faces);
-  // The directions no flange plane fixes: where the scan's sheet edges are against the CAD's.
-  for (const Vec3& d : motion.free_translations) {
-    const double shift = mid_along(in.scan_points, d) - extent_mid(in.model_samples, d);
-    if (!std::isfinite(shift)) continue;
-    for (Transform& T : motion.flange) T.pretranslate(shift * d);
-  }
-  std::vector<bool> known(n, false);
-  std::vector<Vec3> known_points;
-  std::vector<std::uint32_t> known_index;
-  for (std::size_t i = 0; i < n; ++i) {
-    known[i] =
-        motion_at(motion, in.segmentation, in.model_points[i], in.model_faces[i], out.motion[i]);
-    if (!known[i]) continue;
-    const int face = in.model_faces[i];
-    out.guessed[i] = !motion_measured(motion, in.segmentation, face);
-    if (motion.face_flange[static_cast<std::size_t>(face)] < 0)
-      out.bend[i] = motion.face_bend[static_cast<std::size_t>(face)];
-    known_points.push_back(in.model_points[i]);
-    known_index.push_back(static_cast<std::uint32_t>(i));
-  }
-  if (!known_points.empty()) {
-    place_other_faces(in, motion, known, known_points, known_index, out);
-    return out;
-  }
-  std::vector<Vec3> anchors;
-  for (const auto& v : raw.vectors) anchors.push_back(v.model);
-  if (anchors.empty()) return out;
-  const double sigma = median_spacing(anchors);
-  const KdTree tree(anchors);
-  std::vector<Neighbor> near;
-  for (std::size_t i = 0; i < n; ++i)
-    out.motion[i] = smoothed_seed(raw, tree, sigma, in.model_points[i], near);
-  return out;
-}
 
 // The scan points near the predicted positions, bucketed by a dense grid of cells marked around
 // the predictions: one pass over the scan, no tree over a million points.
@@ -357,7 +137,7 @@ double normal_window(const FieldRefinementSettings& s, double thickness) {
   return thickness > 0.0 ? std::min(s.normal_window_mm, 0.5 * thickness) : s.normal_window_mm;
 }
 
-Support support_of(const FieldRefinementInput& in, const Prediction& pred, const ScanGrid& g,
+Support support_of(const FieldRefinementInput& in, const FieldPrediction& pred, const ScanGrid& g,
                    std::size_t i, double thickness, const FieldRefinementSettings& s,
                    std::vector<double>& r) {
   r.clear();
@@ -462,7 +242,7 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
   out.vectors.clear();
   const std::size_t n = in.model_points.size();
   if (n == 0 || in.model_normals.size() != n || in.model_faces.size() != n) return out;
-  const Prediction pred = predict(raw, in);
+  const FieldPrediction pred = predict_field(raw, in);
   std::vector<Vec3> centers(n);
   for (std::size_t i = 0; i < n; ++i) centers[i] = pred.motion[i] * in.model_points[i];
   const double reach = std::hypot(s.support_radius_mm, s.normal_window_mm);

@@ -7,12 +7,12 @@
 #include <deque>
 #include <numbers>
 
+#include "analysis/core/small_solvers.hpp"
+
 namespace springscan::analysis {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 // The turn by `angle_rad` about the line through `point` along the unit `axis`.
 Transform turn_about(const Vec3& point, const Vec3& axis, double angle_rad) {
@@ -120,13 +120,12 @@ Transform fit_correction(const std::vector<Vec3>& y, const std::vector<Vec3>& z,
       H += J * J.transpose();
       g += J * res;
     }
-    const Eigen::SelfAdjointEigenSolver<Mat6> eig(H);
-    const Vec6 rhs = eig.eigenvectors().transpose() * (-g);
-    const double top = eig.eigenvalues().maxCoeff();
+    const SymmetricEigen6 eig = symmetric_eigen(H);
+    const Vec6 rhs = eig.vectors.transpose() * (-g);
+    const double top = eig.values.maxCoeff();
     Vec6 x = Vec6::Zero();
     for (int k = 0; k < 6; ++k)
-      if (eig.eigenvalues()(k) > 1e-4 * top)
-        x += eig.eigenvectors().col(k) * (rhs(k) / eig.eigenvalues()(k));
+      if (eig.values(k) > 1e-4 * top) x += eig.vectors.col(k) * (rhs(k) / eig.values(k));
     const Vec3 w = x.head<3>() / L;
     Transform step = Transform::Identity();
     if (w.norm() > 0.0) step = turn_about(c, w.normalized(), w.norm());

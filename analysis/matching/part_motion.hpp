@@ -30,7 +30,7 @@ struct PartMotion {
   std::vector<int> face_bend;         ///< per face id: index of its bend, -1 if none
   Transform correction = Transform::Identity();  ///< G, fitted to the local fits
   /// Translations no flange plane constrains (along the bend lines of an extrusion): G keeps
-  /// the best fit's value there; field_refinement.cpp measures them at the sheet's edges.
+  /// the best fit's value there; field_prediction.cpp measures them at the sheet's edges.
   std::vector<Vec3> free_translations;
   /// Per flange: its motion rests on measurements only, every bend on its chain from the root
   /// measured. A flange reached through an unmeasured bend (its wall not seen, a closed hem)

@@ -2,14 +2,13 @@
 // datum frame solve and the measure-and-solve passes (datum.hpp).
 #include "analysis/registration/datum.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <sstream>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/small_solvers.hpp"
 #include "analysis/registration/datum_internal.hpp"
 
 namespace springscan::analysis {
@@ -18,8 +17,6 @@ namespace {
 using datum_detail::FeatureFit;
 using datum_detail::FeaturePoints;
 using datum_detail::fixed_directions;
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 constexpr double kRankRatio = 1e-8;     // a direction's information below this x the largest
 constexpr double kConvergedMm = 1e-4;   // a pass moving the frame less than this ends them
@@ -176,7 +173,7 @@ Transform solve_frame(std::vector<Constraint> c, const Vec3& origin) {
       A += k.weight * row * row.transpose();
       b -= k.weight * row * k.direction.dot(k.measured - k.nominal);
     }
-    const Vec6 x = A.ldlt().solve(b);
+    const Vec6 x = ldlt_solve(A, b);
     const Vec3 w = x.head<3>();
     Transform step = Transform::Identity();
     if (w.norm() > 0.0) step.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
@@ -233,9 +230,9 @@ std::optional<Error> validate(const DatumAlignmentSettings& s, std::string_view 
     if (!names.insert(d.name).second) return bad(context, d, "the name is used twice");
   }
   const Information info = information(s.datums);
-  const Eigen::SelfAdjointEigenSolver<Mat6> eig(info.matrix);
-  if (eig.eigenvalues()(0) <= kRankRatio * eig.eigenvalues()(5))
-    return range("the datums leave " + describe_free(eig.eigenvectors().col(0)) +
+  const SymmetricEigen6 eig = symmetric_eigen(info.matrix);
+  if (eig.values(0) <= kRankRatio * eig.values(5))
+    return range("the datums leave " + describe_free(eig.vectors.col(0)) +
                  " free: a 3-2-1 set needs three pads, a hole and a second hole, slot or edge");
   return std::nullopt;
 }

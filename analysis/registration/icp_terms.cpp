@@ -1,6 +1,5 @@
 #include "analysis/registration/icp_terms.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -148,14 +147,14 @@ Step solve_point_to_point(const Partial& p, const StepFrame& f) {
 // Minimises sum w (r + J x)^2 in the span of the significant eigenvectors of A; a plane sliding
 // in itself, or a profile along its axis, gets no motion in its free directions.
 Step solve_point_to_plane(const Partial& p, const StepFrame& f, double ratio) {
-  const Eigen::SelfAdjointEigenSolver<Mat6> eig(p.A);
-  const double largest = std::max(eig.eigenvalues().maxCoeff(), 0.0);
+  const SymmetricEigen6 eig = symmetric_eigen(p.A);
+  const double largest = std::max(eig.values.maxCoeff(), 0.0);
   Vec6 x = Vec6::Zero();
   int determined = 0;
   for (int k = 0; k < 6; ++k) {
-    const double lambda = eig.eigenvalues()(k);
+    const double lambda = eig.values(k);
     if (!(lambda > ratio * largest) || !(lambda > 0.0)) continue;
-    const Vec6 u = eig.eigenvectors().col(k);
+    const Vec6 u = eig.vectors.col(k);
     x -= (u.dot(p.b) / lambda) * u;
     ++determined;
   }

@@ -6,12 +6,13 @@
 #include <cstddef>
 #include <vector>
 
+#include "analysis/core/small_solvers.hpp"
 #include "analysis/registration/icp.hpp"
 
 namespace springscan::analysis::icp_terms {
 
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
+using analysis::Mat6;
+using analysis::Vec6;
 
 /// Where an update turns: about the moved source centroid (conditioning for parts far from the
 /// origin), with the rotation scaled by the source's rms radius so that all six unknowns are
