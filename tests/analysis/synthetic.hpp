@@ -85,13 +85,25 @@ inline PointCloud sample_profile(const ProfileSpec& spec, std::size_t n, unsigne
   return cloud;
 }
 
+/// Three draws of `d` as a vector, drawn z first, then y, then x. C++ leaves the order in which
+/// a call's arguments are evaluated unspecified: Vec3(d(rng), d(rng), d(rng)) draws z first
+/// under g++ and x first under clang, so a test's scenario (its pose, its noise) depended on the
+/// compiler. Sequenced here, in g++'s order, the order every scenario was written against.
+template <typename Distribution>
+Vec3 draw_vec3(Distribution& d, std::mt19937& rng) {
+  const double z = d(rng);
+  const double y = d(rng);
+  const double x = d(rng);
+  return {x, y, z};
+}
+
 /// n points uniformly distributed in the cube [lo, hi)^3 (fixed seed).
 inline std::vector<Vec3> uniform_points(std::size_t n, unsigned seed, double lo = 0.0,
                                         double hi = 100.0) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(lo, hi);
   std::vector<Vec3> points(n);
-  for (auto& p : points) p = Vec3(u(rng), u(rng), u(rng));
+  for (auto& p : points) p = draw_vec3(u, rng);
   return points;
 }
 
@@ -99,11 +111,13 @@ inline std::vector<Vec3> uniform_points(std::size_t n, unsigned seed, double lo 
 inline Transform random_motion(std::mt19937& rng, double max_translation_mm) {
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_real_distribution<double> u(-max_translation_mm, max_translation_mm);
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+  const Vec3 xyz = draw_vec3(g, rng);  // z, y, x, then w: see draw_vec3
+  const double w = g(rng);
+  Eigen::Quaterniond q(w, xyz.x(), xyz.y(), xyz.z());
   q.normalize();
   Transform T = Transform::Identity();
   T.linear() = q.toRotationMatrix();
-  T.translation() = Vec3(u(rng), u(rng), u(rng));
+  T.translation() = draw_vec3(u, rng);
   return T;
 }
 
@@ -111,7 +125,7 @@ inline Transform random_motion(std::mt19937& rng, double max_translation_mm) {
 inline void add_noise(std::vector<Vec3>& points, double sigma_mm, unsigned seed) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> g(0.0, sigma_mm);
-  for (auto& p : points) p += Vec3(g(rng), g(rng), g(rng));
+  for (auto& p : points) p += draw_vec3(g, rng);
 }
 
 /// Replaces `fraction` of the points by uniform points in the cloud's box grown by `margin_mm`.
@@ -126,7 +140,7 @@ inline void add_outliers(std::vector<Vec3>& points, double fraction, double marg
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const auto stride = static_cast<std::size_t>(std::round(1.0 / fraction));
   for (std::size_t i = 0; i < points.size(); i += stride) {
-    const Vec3 t(u(rng), u(rng), u(rng));
+    const Vec3 t = draw_vec3(u, rng);
     points[i] =
         (lo - Vec3::Constant(margin_mm)) + t.cwiseProduct(hi - lo + Vec3::Constant(2 * margin_mm));
   }

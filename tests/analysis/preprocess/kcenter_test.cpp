@@ -66,7 +66,7 @@ TEST(KCenter, CountVariantIsATwoApproximationOnAKnownInstance) {
   std::uniform_real_distribution<double> u(-0.5, 0.5);
   for (int c = 0; c < 4; ++c)
     for (int i = 0; i < 100; ++i)
-      points.push_back(Vec3(100.0 * c, 37.0 * (c % 2), 0) + Vec3(u(rng), u(rng), u(rng)));
+      points.push_back(Vec3(100.0 * c, 37.0 * (c % 2), 0) + testing::draw_vec3(u, rng));
   auto r = kcenter_reduce(points, {4, 0.0, 0, 16});
   ASSERT_TRUE(r);
   EXPECT_EQ(r->centers.size(), 4u);

@@ -27,12 +27,12 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 Transform near_half_turn(std::mt19937& rng, int axis) {
   std::normal_distribution<double> g;
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const Vec3 wobble_axis = Vec3(g(rng), g(rng), g(rng)).normalized();
+  const Vec3 wobble_axis = testing::draw_vec3(g, rng).normalized();
   const Mat3 R = Eigen::AngleAxisd(10.0 * kDeg * u(rng), wobble_axis).toRotationMatrix() *
                  Eigen::AngleAxisd(std::numbers::pi, Vec3::Unit(axis)).toRotationMatrix();
   Transform T = Transform::Identity();
   T.linear() = R;
-  T.translation() = 200.0 * Vec3(u(rng), u(rng), u(rng));
+  T.translation() = 200.0 * testing::draw_vec3(u, rng);
   return T;
 }
 
