@@ -135,17 +135,25 @@ std::string polyline_svg(const google::protobuf::RepeatedPtrField<v1::Vec3>& poi
   return svg.str();
 }
 
-// Each measured free edge: the CAD edge (dashed) and the scan's edge, where a quality engineer
-// reads overhang or draw-in against the colours. Bounded like the bend labels.
-std::string free_edges_overlay(const v1::InspectionReport& report, const ViewProjection& view,
+// Each measured trim edge: the CAD edge (dashed) and the scan's edge, where a quality engineer
+// reads overhang or draw-in against the colours. Bounded like the bend labels, per flange.
+std::string trim_edges_overlay(const v1::InspectionReport& report, const ViewProjection& view,
                                const ReportSettings& settings) {
   std::string overlay;
   int drawn = 0;
   for (const v1::Segment& segment : report.segments()) {
-    if (!segment.has_edge_deviation_mm() || drawn >= settings.max_bend_labels) continue;
-    const v1::EdgeDeviation& e = segment.edge_deviation_mm();
-    overlay += polyline_svg(e.cad_edge(), view, "cadedge");
-    overlay += polyline_svg(e.scan_edge(), view, "scanedge");
+    if (drawn >= settings.max_bend_labels) break;
+    // Reports written before trim_edges carry the free edge alone.
+    const auto draw = [&](const v1::EdgeDeviation& e) {
+      overlay += polyline_svg(e.cad_edge(), view, "cadedge");
+      overlay += polyline_svg(e.scan_edge(), view, "scanedge");
+    };
+    if (segment.trim_edges_size() > 0)
+      for (const v1::EdgeDeviation& e : segment.trim_edges()) draw(e);
+    else if (segment.has_edge_deviation_mm())
+      draw(segment.edge_deviation_mm());
+    else
+      continue;
     ++drawn;
   }
   return overlay;
@@ -167,7 +175,7 @@ analysis::Expected<std::string> deviation_views_html(const v1::InspectionReport&
     for (std::size_t i = first; i < kCount; i += stride) {
       const ViewProjection view = fit_view(cloud.points, kKinds[i], view_settings(settings));
       svgs[i] = view_svg(cloud.points, cloud.deviation_colors, cloud.spacing_mm, view, settings,
-                         free_edges_overlay(report, view, settings),
+                         trim_edges_overlay(report, view, settings),
                          std::string("deviation, ") + view_name(kKinds[i]) + " view");
     }
   };

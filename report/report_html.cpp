@@ -45,7 +45,7 @@ analysis::Expected<std::string> deviation_section(const v1::InspectionReport& re
          std::to_string(cloud.points.size()) +
          " points of the scan. Green lies within the tolerance; blue is below the CAD surface "
          "(against its outward normal), red above. A flange coloured blue at one end and red at "
-         "the other is turned: look at the bend table. A measured free edge is drawn twice: "
+         "the other is turned: look at the bend table. A measured trim edge is drawn twice: "
          "where the CAD puts it (dashed) and where the scan's edge is (purple).</p></div></div>" +
          "<div class='colorbar-wrap'>" + color_bar_svg(scale_mm, tolerance_of(report), 1000) +
          "</div>" + *views + "</section>";

@@ -75,14 +75,23 @@ std::string shape_cells(const v1::Segment& segment) {
          "</td>";
 }
 
-// A free edge against the CAD edge: mean along the sheet and across it, with their ranges.
+// One trim edge against the CAD edge: mean along the sheet and across it, with their ranges.
+std::string edge_line(const v1::EdgeDeviation& e) {
+  return escape_html(e.kind().empty() ? "free" : e.kind()) + " edge: in-plane " +
+         signed_fixed(e.in_plane_mean(), 2) + " (" + signed_fixed(e.in_plane_min(), 2) + " to " +
+         signed_fixed(e.in_plane_max(), 2) + "), across " + signed_fixed(e.across_mean(), 2) +
+         " (" + signed_fixed(e.across_min(), 2) + " to " + signed_fixed(e.across_max(), 2) + ")";
+}
+
+// The flange's measured trim edges, one line each (a report written before trim_edges: its
+// free edge).
 std::string edge_cell(const v1::Segment& segment) {
-  if (!segment.has_edge_deviation_mm()) return "<td class='num'>&mdash;</td>";
-  const v1::EdgeDeviation& e = segment.edge_deviation_mm();
-  return "<td class='num'>in-plane " + signed_fixed(e.in_plane_mean(), 2) + " (" +
-         signed_fixed(e.in_plane_min(), 2) + " to " + signed_fixed(e.in_plane_max(), 2) +
-         ")<br>across " + signed_fixed(e.across_mean(), 2) + " (" +
-         signed_fixed(e.across_min(), 2) + " to " + signed_fixed(e.across_max(), 2) + ")</td>";
+  std::string lines;
+  for (const v1::EdgeDeviation& e : segment.trim_edges())
+    lines += (lines.empty() ? "" : "<br>") + edge_line(e);
+  if (lines.empty() && segment.has_edge_deviation_mm())
+    lines = edge_line(segment.edge_deviation_mm());
+  return "<td class='num'>" + (lines.empty() ? std::string("&mdash;") : lines) + "</td>";
 }
 
 }  // namespace
@@ -166,7 +175,7 @@ std::string segment_table(const v1::InspectionReport& report) {
       "<th class='num'>Points</th><th class='num'>Local fit RMS [mm]</th>"
       "<th class='num'>Iterations</th><th>Converged</th><th class='num'>Flatness [mm]</th>"
       "<th class='num'>Curl radius [mm]</th><th class='num'>Twist [\u00b0/100 mm]</th>"
-      "<th class='num'>Free edge [mm]</th></tr>";
+      "<th class='num'>Trim edges [mm]</th></tr>";
   for (const auto& segment : report.segments()) {
     std::string faces;
     for (int f : segment.cad_faces()) faces += (faces.empty() ? "" : ", ") + std::to_string(f);

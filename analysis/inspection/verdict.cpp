@@ -80,12 +80,13 @@ void check_shape(const VerdictInput& in, const VerdictSettings& s, VerdictResult
   for (const FlangeShapeSummary& f : in.flanges) {
     if (!f.measured) continue;
     const std::string name = "flange " + std::to_string(f.flange_id);
-    if (s.max_edge_deviation_mm > 0.0 && f.edge_measured &&
-        !(std::max(std::abs(f.edge_in_plane_mm), std::abs(f.edge_across_mm)) <=
-          s.max_edge_deviation_mm)) {
-      out.reasons.push_back(name + " free edge off by " + fixed2(f.edge_in_plane_mm) +
-                            " mm in-plane, " + fixed2(f.edge_across_mm) + " mm across (limit " +
-                            fixed2(s.max_edge_deviation_mm) + " mm)");
+    for (const EdgeSummary& e : f.edges) {
+      if (s.max_edge_deviation_mm > 0.0 &&
+          !(std::max(std::abs(e.in_plane_mm), std::abs(e.across_mm)) <= s.max_edge_deviation_mm)) {
+        out.reasons.push_back(name + " " + e.kind + " edge off by " + fixed2(e.in_plane_mm) +
+                              " mm in-plane, " + fixed2(e.across_mm) + " mm across (limit " +
+                              fixed2(s.max_edge_deviation_mm) + " mm)");
+      }
     }
     if (s.max_flatness_mm > 0.0 && !(f.flatness_mm <= s.max_flatness_mm)) {
       out.reasons.push_back(name + " flatness " + fixed2(f.flatness_mm) + " mm exceeds " +
@@ -128,10 +129,13 @@ std::vector<FlangeShapeSummary> flange_shapes(const std::vector<FlangeFit>& flan
   out.reserve(flanges.size());
   for (const FlangeFit& f : flanges) {
     const auto larger = [](double a, double b) { return std::abs(a) >= std::abs(b) ? a : b; };
-    out.push_back({f.flange_id, f.shape.measured, f.shape.flatness_max_mm, f.shape.curled,
-                   f.shape.curl_radius_mm, f.edge.measured,
-                   larger(f.edge.in_plane_min_mm, f.edge.in_plane_max_mm),
-                   larger(f.edge.across_min_mm, f.edge.across_max_mm)});
+    FlangeShapeSummary summary{f.flange_id, f.shape.measured, f.shape.flatness_max_mm,
+                               f.shape.curled, f.shape.curl_radius_mm};
+    for (const EdgeDeviation& e : f.trim_edges)
+      summary.edges.push_back({std::string(edge_kind_name(e.kind)),
+                               larger(e.in_plane_min_mm, e.in_plane_max_mm),
+                               larger(e.across_min_mm, e.across_max_mm)});
+    out.push_back(std::move(summary));
   }
   return out;
 }

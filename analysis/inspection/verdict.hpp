@@ -13,8 +13,9 @@
 //             fail_unmeasured_bends;
 //   shape     (each off at 0) per bend the spread of its angle along the bend <=
 //             max_angle_spread_deg; per flange its flatness <= max_flatness_mm and, when it is
-//             curled, |curl radius| >= min_curl_radius_mm; an end flange's free edge within
-//             max_edge_deviation_mm of the CAD edge, in-plane and across;
+//             curled, |curl radius| >= min_curl_radius_mm; each measured trim edge (an end
+//             flange's free edge, a side edge) within max_edge_deviation_mm of the CAD edge,
+//             in-plane and across;
 //   health    the deformation field covers >= min_coverage of the reduced model (when a field
 //             was computed), and the global fit's residual rms to the surface (the trimmed
 //             deviation rms; not rms_final, which grows with the sample spacing) <=
@@ -51,7 +52,14 @@ struct VerdictSettings {
   double max_angle_spread_deg = 0.0;   ///< bend angle max - min along a bend; 0: not checked
   double min_curl_radius_mm = 0.0;     ///< least |curl radius| of a curled flange; 0: not checked
   double max_flatness_mm = 0.0;        ///< largest flange flatness (max distance); 0: not checked
-  double max_edge_deviation_mm = 0.0;  ///< largest |move| of a free edge; 0: not checked
+  double max_edge_deviation_mm = 0.0;  ///< largest |move| of a trim edge; 0: not checked
+};
+
+/// One measured trim edge of a flange (springback stage, FlangeFit::trim_edges).
+struct EdgeSummary {
+  std::string kind;          ///< "free" or "side" (edge_kind_name), for the reason
+  double in_plane_mm = 0.0;  ///< its in-plane move of largest magnitude (signed)
+  double across_mm = 0.0;    ///< its move across of largest magnitude (signed)
 };
 
 /// What the shape rules need of one flange (springback stage, FlangeFit::shape).
@@ -60,10 +68,8 @@ struct FlangeShapeSummary {
   bool measured = false;
   double flatness_mm = 0.0;  ///< max distance from its plane
   bool curled = false;
-  double curl_radius_mm = 0.0;    ///< signed; meaningful when curled
-  bool edge_measured = false;     ///< an end flange's free edge was measured
-  double edge_in_plane_mm = 0.0;  ///< its in-plane move of largest magnitude (signed)
-  double edge_across_mm = 0.0;    ///< its move across of largest magnitude (signed)
+  double curl_radius_mm = 0.0;       ///< signed; meaningful when curled
+  std::vector<EdgeSummary> edges{};  ///< its measured trim edges
 };
 
 /// How much of the reduced model the deformation field covers (matching stage).

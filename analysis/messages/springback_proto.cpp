@@ -11,7 +11,23 @@ void to_proto(const Vec3& v, v1::Vec3& out) {
   out.set_z(v.z());
 }
 
-// The flange's shape figures; curl and twist only where they are defined.
+void edge_to_proto(const EdgeDeviation& e, v1::EdgeDeviation& out) {
+  out.set_kind(std::string(edge_kind_name(e.kind)));
+  out.set_strips(e.strips);
+  out.set_in_plane_mean(e.in_plane_mean_mm);
+  out.set_in_plane_min(e.in_plane_min_mm);
+  out.set_in_plane_max(e.in_plane_max_mm);
+  out.set_across_mean(e.across_mean_mm);
+  out.set_across_min(e.across_min_mm);
+  out.set_across_max(e.across_max_mm);
+  to_proto(e.direction, *out.mutable_direction());
+  to_proto(e.outward, *out.mutable_outward());
+  out.set_length_mm(e.length_mm);
+  for (const Vec3& p : e.cad_edge) to_proto(p, *out.add_cad_edge());
+  for (const Vec3& p : e.scan_edge) to_proto(p, *out.add_scan_edge());
+}
+
+// The flange's shape figures; curl and twist only where they are defined; its trim edges.
 void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
   const FlangeShape& shape = flange.shape;
   s.set_shape_measured(shape.measured);
@@ -22,18 +38,10 @@ void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
     s.set_curl_radius_mm(shape.curl_radius_mm);
   if (flange.has_bend_line && shape.twist_measured)
     s.set_twist_deg_per_100mm(shape.twist_deg_per_100mm);
-  if (!flange.edge.measured) return;
-  const EdgeDeviation& e = flange.edge;
-  v1::EdgeDeviation& out = *s.mutable_edge_deviation_mm();
-  out.set_strips(e.strips);
-  out.set_in_plane_mean(e.in_plane_mean_mm);
-  out.set_in_plane_min(e.in_plane_min_mm);
-  out.set_in_plane_max(e.in_plane_max_mm);
-  out.set_across_mean(e.across_mean_mm);
-  out.set_across_min(e.across_min_mm);
-  out.set_across_max(e.across_max_mm);
-  for (const Vec3& p : e.cad_edge) to_proto(p, *out.add_cad_edge());
-  for (const Vec3& p : e.scan_edge) to_proto(p, *out.add_scan_edge());
+  for (const EdgeDeviation& e : flange.trim_edges) {
+    edge_to_proto(e, *s.add_trim_edges());
+    if (e.kind == EdgeKind::kFree) edge_to_proto(e, *s.mutable_edge_deviation_mm());
+  }
 }
 
 // The angle along the bend, the end-tangent definition and the measured radius.

@@ -45,7 +45,7 @@ std::vector<std::uint32_t> one_skin(const PointCloud& scan,
   return near.size() >= far.size() ? near : far;
 }
 
-// Flange f's shape in the frame of its bend line, and an end flange's free edge.
+// Flange f's shape in the frame of its bend line, and its trim edges.
 void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
                          const std::vector<std::uint32_t>& points, const BendShapeSettings& st,
                          std::size_t f, SpringbackResult& result) {
@@ -67,8 +67,8 @@ void fit_flange_shape_of(const PartModel& model, const PointCloud& scan,
     fit.shape.twist_deg_per_100mm = 0.0;
     fit.shape.twist_measured = false;
   }
-  if (bend && bends_of(seg, flange.id) == 1)
-    fit.edge = measure_free_edge(model, flange, fit.shape, bend->axis_point, scan, points, st.edge);
+  const Bend* end_bend = bend && bends_of(seg, flange.id) == 1 ? bend : nullptr;
+  fit.trim_edges = measure_trim_edges(model, flange, fit.shape, end_bend, scan, points, st.edge);
 }
 
 // The flange's end normal next to the bend on the bend's concave side (the side its nominal

@@ -79,7 +79,14 @@ struct FlangeFit {
   Mat3 spread = Mat3::Zero();           ///< sum of (p - centroid)(p - centroid)^T, mm^2
   FlangeShape shape;                    ///< flatness, curl, twist (shape.measured: whether)
   bool has_bend_line = false;  ///< false: no bend orients it; curl and twist are not defined
-  EdgeDeviation edge;          ///< its free edge (end flanges: one bend) against the CAD's
+  /// Its measured trim edges against the CAD's (an end flange's free edge among them).
+  std::vector<EdgeDeviation> trim_edges;
+  /// The free edge of an end flange (one bend), when it was measured; else null.
+  const EdgeDeviation* free_edge() const {
+    for (const EdgeDeviation& e : trim_edges)
+      if (e.kind == EdgeKind::kFree) return &e;
+    return nullptr;
+  }
 };
 
 /// The bend angle at one station along the bend line.

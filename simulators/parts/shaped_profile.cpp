@@ -93,9 +93,11 @@ std::string check(const ProfileSpec& nominal, const ProfileShape& shape) {
   };
   if (!sized(shape.springback_deg, bends) ||
       !sized(shape.springback_gradient_deg_per_100mm, bends) || !sized(shape.curl_radius_mm, n) ||
-      !sized(shape.length_change_mm, n))
-    return "springback, gradient, curl and length change need one value per bend, bend, flange "
-           "and flange";
+      !sized(shape.length_change_mm, n) || !sized(shape.width_change_mm, n))
+    return "springback, gradient, curl, length and width change need one value per bend, bend, "
+           "flange, flange and flange";
+  for (double w : shape.width_change_mm)
+    if (!(nominal.width_mm + w > 0.0)) return "a width change leaves no flange";
   for (std::size_t i = 0; i < n; ++i)
     if (!(flange_length(nominal, shape, i) > 0.0))
       return "flange " + std::to_string(i) + ": length change leaves no flange";
@@ -195,7 +197,16 @@ Expected<PointCloud> simulate_shaped_scan(const ProfileSpec& nominal, const Prof
         "simulate_shaped_scan: missing_fraction must be 0, noise >= 0, outliers in [0, 0.5]");
   const Vec2 pivot = path_middle(nominal);
   std::mt19937_64 rng(settings.seed);
-  std::uniform_real_distribution<double> uy(0.0, nominal.width_mm), unit(0.0, 1.0);
+  // Uniform over the widest flange; a point beyond its own element's side edge is drawn again.
+  double widest = 0.0;
+  for (double w : shape.width_change_mm) widest = std::max(widest, w);
+  const auto side_edge = [&](const ProfileElement& e) {
+    return nominal.width_mm +
+           (e.flange_index >= 0
+                ? value_or_zero(shape.width_change_mm, static_cast<std::size_t>(e.flange_index))
+                : 0.0);
+  };
+  std::uniform_real_distribution<double> uy(0.0, nominal.width_mm + widest), unit(0.0, 1.0);
   std::uniform_real_distribution<double> outlier(-settings.outlier_max_mm, settings.outlier_max_mm);
   std::normal_distribution<double> noise(0.0, std::max(settings.noise_sigma_mm, 1e-300));
   const bool noisy = settings.noise_sigma_mm > 0.0;
@@ -212,6 +223,7 @@ Expected<PointCloud> simulate_shaped_scan(const ProfileSpec& nominal, const Prof
     double s = unit(rng) * total;
     std::size_t k = 0;
     while (k + 1 < path.size() && s > path[k].length_mm()) s -= path[k++].length_mm();
+    if (y > side_edge(path[k])) continue;
     const PathPoint p = point_at(path[k], std::clamp(s, 0.0, path[k].length_mm()));
     const Vec3 normal(p.normal.x(), 0.0, p.normal.y());
     const bool is_outlier = unit(rng) < settings.outlier_fraction;

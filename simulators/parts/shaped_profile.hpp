@@ -8,7 +8,9 @@
 //     starts turned back by half its sweep), so every flange's chord keeps its nominal
 //     direction (a curled wall bows out between its nominal ends),
 //   - twist: the whole section turning linearly about the y axis along y,
-//   - flange lengths changed (a free edge moved along the sheet).
+//   - flange lengths changed (a free edge moved along the sheet),
+//   - a flange's side edge at y = width moved along y (a trim edge off: the flange alone
+//     reaches to width + change, its bends and the other flanges to width).
 // The section at every y is built exactly (lines and arcs), so every figure below is known in
 // closed form: the angle each bend turns at any y, each flange's curl radius and twist rate.
 //
@@ -39,6 +41,10 @@ struct ProfileShape {
   /// Per flange: its length as produced minus the nominal (a free edge moved along the sheet:
   /// overhang > 0, draw-in < 0); empty: 0.
   std::vector<double> length_change_mm;
+  /// Per flange: where its side edge at y = width lies as produced minus the nominal (along +y:
+  /// overhang > 0, draw-in < 0); empty: 0. Scans only (simulate_shaped_scan): shaped_section
+  /// gives the section at any y.
+  std::vector<double> width_change_mm;
 };
 
 /// The produced section at extrusion coordinate `y_mm`: elements in path order as

@@ -87,13 +87,17 @@ TEST_F(HtmlReport, ShowsTheAngleAlongTheBendAndTheFlangeShape) {
   EXPECT_NE(html_->find(">1.234 (rms 0.020)</td><td class='num'>-240</td><td class='num'>+0.125<"),
             std::string::npos);
   EXPECT_NE(html_->find(">0.081 (rms 0.020)</td><td class='num'>flat</td>"), std::string::npos);
-  EXPECT_NE(html_->find(">in-plane +0.31 (+0.29 to +0.33)<br>across -0.52 (-0.55 to -0.49)<"),
+  EXPECT_NE(html_->find(">free edge: in-plane +0.31 (+0.29 to +0.33), across -0.52 (-0.55 to "
+                        "-0.49)<"),
+            std::string::npos);
+  EXPECT_NE(html_->find(">side edge: in-plane -0.12 (-0.15 to -0.10), across +0.04 (+0.03 to "
+                        "+0.05)<"),
             std::string::npos);
 }
 
-// The fixture's one measured free edge, drawn on each of the four deviation views: the CAD edge
-// and the scan's edge, three strip centres each.
-TEST_F(HtmlReport, DrawsTheFreeEdgeOnEveryDeviationView) {
+// The fixture's two measured trim edges (a free edge, a side edge), drawn on each of the four
+// deviation views: the CAD edge and the scan's edge, three strip centres each.
+TEST_F(HtmlReport, DrawsTheTrimEdgesOnEveryDeviationView) {
   const auto section = html_->substr(html_->find("<section id='deviation'>"));
   const std::string deviation = section.substr(0, section.find("</section>"));
   const auto count = [&](const std::string& needle) {
@@ -103,8 +107,8 @@ TEST_F(HtmlReport, DrawsTheFreeEdgeOnEveryDeviationView) {
       ++n;
     return n;
   };
-  EXPECT_EQ(count("<polyline class='cadedge' points='"), 4u);
-  EXPECT_EQ(count("<polyline class='scanedge' points='"), 4u);
+  EXPECT_EQ(count("<polyline class='cadedge' points='"), 8u);
+  EXPECT_EQ(count("<polyline class='scanedge' points='"), 8u);
   const auto at = deviation.find("<polyline class='scanedge' points='");
   const std::string points = deviation.substr(at, deviation.find("'/>", at) - at);
   EXPECT_EQ(std::count(points.begin(), points.end(), ','), 3) << points;

@@ -128,6 +128,25 @@ void fill_report(const std::vector<ProfileElement>& path, double total_mm,
         *edge->add_cad_edge() = vec(parts::profile_to_3d(p, y));
         *edge->add_scan_edge() = vec(parts::profile_to_3d(p + 0.31 * out - 0.52 * n, y));
       }
+      edge->set_kind("free");
+      *seg->add_trim_edges() = *edge;
+    }
+    if (s == 2) {  // the web's side edge at y = 0: 0.12 mm drawn in, 0.04 mm high
+      auto* edge = seg->add_trim_edges();
+      edge->set_kind("side");
+      edge->set_strips(3);
+      edge->set_in_plane_mean(-0.12);
+      edge->set_in_plane_min(-0.15);
+      edge->set_in_plane_max(-0.1);
+      edge->set_across_mean(0.04);
+      edge->set_across_min(0.03);
+      edge->set_across_max(0.05);
+      const double start = 0.4 * total_mm, end = 0.6 * total_mm;
+      for (int k = 0; k < 3; ++k) {
+        const auto [p, n] = at_length(path, start + (k + 0.5) * (end - start) / 3.0);
+        *edge->add_cad_edge() = vec(parts::profile_to_3d(p, 0.0));
+        *edge->add_scan_edge() = vec(parts::profile_to_3d(p + 0.04 * n, 0.12));
+      }
     }
   }
   // Compensation: opposite of the deviation field at 60 control points along the profile.

@@ -184,18 +184,21 @@ TEST(Verdict, ShapeRulesAreOffByDefaultAndNameTheirNumbers) {
   EXPECT_FALSE(has_reason(v, "flange 0"));
   EXPECT_FALSE(has_reason(v, "bend 0 angle spread"));
   EXPECT_TRUE(v.bends[1].pass) << "the bend's own pass is its springback";
-  // The free edge: off by default, then its larger move against the limit.
-  in.flanges[0].edge_measured = true;
-  in.flanges[0].edge_in_plane_mm = 0.31;
-  in.flanges[0].edge_across_mm = -0.52;
+  // The trim edges: off by default, then each edge's larger move against the limit.
+  in.flanges[0].edges = {{"free", 0.31, -0.52}, {"side", -0.12, 0.2}};
   EXPECT_FALSE(has_reason(decide_verdict(in, s), "free edge"));
   VerdictSettings edge;
   edge.max_edge_deviation_mm = 0.5;
   EXPECT_TRUE(
       has_reason(decide_verdict(in, edge),
                  "flange 0 free edge off by 0.31 mm in-plane, -0.52 mm across (limit 0.50 mm)"));
+  EXPECT_FALSE(has_reason(decide_verdict(in, edge), "side edge"));
   edge.max_edge_deviation_mm = 0.6;
   EXPECT_TRUE(decide_verdict(in, edge).pass);
+  edge.max_edge_deviation_mm = 0.15;
+  EXPECT_TRUE(
+      has_reason(decide_verdict(in, edge),
+                 "flange 0 side edge off by -0.12 mm in-plane, 0.20 mm across (limit 0.15 mm)"));
   // Within the limits: no reason.
   s.max_angle_spread_deg = 0.9;
   s.min_curl_radius_mm = 150.0;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "analysis/messages/verdict_proto.hpp"
 #include "simulators/parts/shaped_profile.hpp"
 #include "simulators/parts/sheet_part.hpp"
@@ -91,6 +93,23 @@ TEST(SpringbackProto, ReportHoldsTheShapeFigures) {
   EXPECT_NEAR(report.segments(2).edge_deviation_mm().in_plane_mean(),
               (produced->back().end - nominal_end.end).dot(out), 0.05);
   EXPECT_FALSE(report.segments(1).has_edge_deviation_mm());
+  // Every trim edge is listed, the free edge among them with the same figures.
+  const auto& trim = report.segments(2).trim_edges();
+  const auto free = std::find_if(trim.begin(), trim.end(),
+                                 [](const v1::EdgeDeviation& e) { return e.kind() == "free"; });
+  ASSERT_NE(free, trim.end());
+  EXPECT_EQ(free->in_plane_mean(), report.segments(2).edge_deviation_mm().in_plane_mean());
+  EXPECT_NEAR(free->outward().x() * out.x() + free->outward().z() * out.y(), 1.0, 1e-3);
+  for (int s = 0; s < 3; ++s)
+    for (const v1::EdgeDeviation& e : report.segments(s).trim_edges()) {
+      EXPECT_TRUE(e.kind() == "free" || e.kind() == "side") << e.kind();
+      EXPECT_EQ(e.cad_edge_size(), e.strips());
+      EXPECT_GT(e.length_mm(), 0.0);
+    }
+  EXPECT_EQ(
+      std::count_if(report.segments(1).trim_edges().begin(), report.segments(1).trim_edges().end(),
+                    [](const v1::EdgeDeviation& e) { return e.kind() == "free"; }),
+      0);
 }
 
 }  // namespace

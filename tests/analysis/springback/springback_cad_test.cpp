@@ -77,19 +77,32 @@ TEST(SpringbackCad, FreeEdgesOfASolidSheet) {
   const auto result = measure_springback(*model, *scan);
   ASSERT_TRUE(result.ok()) << result.message();
   int edges = 0;
+  double total = 0.0;
   for (const FlangeFit& f : result->flanges) {
-    if (!f.edge.measured) continue;
+    const EdgeDeviation* e = f.free_edge();
+    if (!e) continue;
     ++edges;
     // Flange ids follow segment_cad; the moved brim is the one whose edge came out.
-    const double truth = f.edge.in_plane_mean_mm > 0.15 ? 0.3 : 0.0;
-    EXPECT_NEAR(f.edge.in_plane_min_mm, truth, 0.05) << "flange " << f.flange_id;
-    EXPECT_NEAR(f.edge.in_plane_max_mm, truth, 0.05) << "flange " << f.flange_id;
-    EXPECT_NEAR(f.edge.across_mean_mm, 0.0, 0.05) << "flange " << f.flange_id;
+    const double truth = e->in_plane_mean_mm > 0.15 ? 0.3 : 0.0;
+    EXPECT_NEAR(e->in_plane_min_mm, truth, 0.05) << "flange " << f.flange_id;
+    EXPECT_NEAR(e->in_plane_max_mm, truth, 0.05) << "flange " << f.flange_id;
+    EXPECT_NEAR(e->across_mean_mm, 0.0, 0.05) << "flange " << f.flange_id;
+    total += e->in_plane_mean_mm;
   }
   EXPECT_EQ(edges, 2);
-  double total = 0.0;
-  for (const FlangeFit& f : result->flanges) total += f.edge.measured ? f.edge.in_plane_mean_mm : 0;
   EXPECT_NEAR(total, 0.3, 0.05) << "one edge moved by 0.3 mm, the other not";
+  // The side edges of every flange, where the sheet ends along the extrusion: as drawn.
+  int side_edges = 0;
+  for (const FlangeFit& f : result->flanges)
+    for (const EdgeDeviation& e : f.trim_edges) {
+      if (e.kind != EdgeKind::kSide) continue;
+      ++side_edges;
+      EXPECT_NEAR(e.in_plane_mean_mm, 0.0, 0.05) << "flange " << f.flange_id;
+      EXPECT_NEAR(e.across_mean_mm, 0.0, 0.05) << "flange " << f.flange_id;
+    }
+  // Two on each of five flanges; on this solid one of them may miss points in a strip next
+  // to a bend (9 of 10 measured here) and is then left out, as the rule says.
+  EXPECT_GE(side_edges, 8) << "two on each of five flanges";
 }
 
 }  // namespace
