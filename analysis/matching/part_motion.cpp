@@ -202,11 +202,16 @@ PartMotion part_motion(const PartSegmentation& s, const SpringbackResult& r,
     n.push_back((M.linear() * normals[i]).normalized());
   }
   out.correction = fit_correction(y, z, n);
-  // Free translations from the CAD normals (exact: the measured ones carry the fits' noise).
+  // Free translations from the CAD normals (exact: the measured ones carry the fits' noise) of
+  // the flanges G was fitted to: a flange whose fit was rejected (a wall seen edge-on) fixes
+  // nothing, and the direction it alone would fix keeps the best fit's value unless it is
+  // listed here (the front panel's walls at both ends of its bend lines: 0.6 mm along them).
   Mat3 N = Mat3::Zero();
   for (std::size_t i = 0; i < points.size(); ++i) {
     const int face = face_ids[i];
-    if (face >= 0 && face < faces && out.face_flange[static_cast<std::size_t>(face)] >= 0)
+    if (face < 0 || face >= faces) continue;
+    const int f = out.face_flange[static_cast<std::size_t>(face)];
+    if (f >= 0 && out.flange_fitted[static_cast<std::size_t>(f)])
       N += normals[i] * normals[i].transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Mat3> nn(N);

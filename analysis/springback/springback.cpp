@@ -296,15 +296,20 @@ double median_fit_rms(const SpringbackResult& result) {
 
 // A curled wall's plane fit stays far above the noise, and rightly. The curl explains it when
 // it is a curl: its radius larger than the flange's extent across (a few millimetres is a fold,
-// or stray points of other faces) and nearly all points within the shape fit's inlier band.
-bool curl_explains_fit(const FlangeShape& shape) {
+// or stray points of other faces), nearly all points within the shape fit's inlier band, and
+// that band as narrow as the noise allows a plane fit (`noise_limit_mm`, as a robust sigma).
+// The inlier band is 3 robust sigmas of the residuals about the curl itself, so without the
+// last rule any point set passes: the front panel's 18 mm walls, seen edge-on, left 1,000 points
+// of their rims and skins that a 27 mm "curl" fitted with a robust sigma of a tenth of a mm.
+bool curl_explains_fit(const FlangeShape& shape, double outlier_sigmas, double noise_limit_mm) {
   constexpr double kMinInlierShare = 0.9;
   if (!shape.measured || !shape.curled || shape.local.empty()) return false;
   double s_min = shape.local.front().x(), s_max = s_min;
   for (const Vec3& q : shape.local) s_min = std::min(s_min, q.x()), s_max = std::max(s_max, q.x());
   return std::abs(shape.curl_radius_mm) > s_max - s_min &&
          static_cast<double>(shape.inliers) >=
-             kMinInlierShare * static_cast<double>(shape.local.size());
+             kMinInlierShare * static_cast<double>(shape.local.size()) &&
+         shape.inlier_threshold_mm <= outlier_sigmas * noise_limit_mm;
 }
 
 // A fit whose rms stays far above the other flanges' (the scan's noise as the fits see it)
@@ -320,7 +325,9 @@ std::vector<int> reject_poor_fits(SpringbackResult& result, const SpringbackSett
   if (!(median > 0.0) || !(st.max_fit_rms_ratio > 0.0)) return rejected;
   constexpr double kUnconvergedRatio = 2.0;  // an unconverged fit must be this near the noise
   for (FlangeFit& f : result.flanges) {
-    if (!f.fitted || curl_explains_fit(f.shape)) continue;
+    if (!f.fitted ||
+        curl_explains_fit(f.shape, st.shape.flange.outlier_sigmas, st.max_fit_rms_ratio * median))
+      continue;
     const std::string figures = "rms " + std::to_string(f.fit.rms_mm) + " mm over " +
                                 std::to_string(f.fit.points) + " points, the median flange fit " +
                                 std::to_string(median) + " mm";
