@@ -23,7 +23,7 @@ namespace springscan::analysis {
 /// The motion of each flange and how the bends blend them.
 struct PartMotion {
   std::vector<Transform> flange;      ///< per segmentation flange (same order): T_result_cad
-  std::vector<bool> flange_fitted;    ///< the flange's local fit took part in G
+  std::vector<bool> flange_fitted;    ///< its local fit took part in G (fitted, chain measured)
   std::vector<double> bend_turn_rad;  ///< per segmentation bend: signed turn of b relative to a
                                       ///< about the bend axis (-springback)
   std::vector<int> face_flange;       ///< per face id: index of its flange, -1 if none
