@@ -192,6 +192,8 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
   std::vector<Vec3> normals;
   std::vector<int> faces;
   control_point_attributes(model, model_tree, reduced.model_centers, normals, faces);
+  // Where the scanner looked from, for normals the refinement estimates (a points-only scan).
+  const Vec3 viewpoint = T_cad_scan * s.normals.viewpoint;
   const FieldRefinementInput input{reduced.model_centers,
                                    normals,
                                    faces,
@@ -201,7 +203,8 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
                                    model.samples.points,
                                    &scan_in_cad.normals,
                                    &model.samples.face_ids,
-                                   &model.samples.normals};
+                                   &model.samples.normals,
+                                   &viewpoint};
   const auto field = refine_field(*raw, input, s.field.refinement);
   to_proto(field, report.mutable_deformation_field());
   if (!field.uncovered.empty())

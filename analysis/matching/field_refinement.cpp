@@ -10,6 +10,7 @@
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
 #include "analysis/matching/field_prediction.hpp"
+#include "analysis/preprocess/normals.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -137,14 +138,36 @@ double normal_window(const FieldRefinementSettings& s, double thickness) {
   return thickness > 0.0 ? std::min(s.normal_window_mm, 0.5 * thickness) : s.normal_window_mm;
 }
 
+// The normals of the grid's scan points (by position in g.indices, result frame, toward the
+// scanner): the scan's own, or on a solid without them estimated from the grid's points (k
+// nearest, turned toward the viewpoint). A sheet edge's points get a normal between its skin's
+// and its rim's; the cone of kMinNormalCosine still parts the two faces beyond a neighbourhood
+// from the edge. Empty: none (a surface model needs none; a solid then has the position rule).
+std::vector<Vec3> grid_normals(const FieldRefinementInput& in, const ScanGrid& g, bool solid,
+                               int threads) {
+  std::vector<Vec3> out;
+  if (!solid) return out;
+  if (in.scan_normals && in.scan_normals->size() == in.scan_points.size()) {
+    out.reserve(g.indices.size());
+    for (const std::uint32_t j : g.indices) out.push_back((*in.scan_normals)[j]);
+    return out;
+  }
+  if (!in.scan_viewpoint || g.indices.size() < 3) return out;
+  std::vector<Vec3> points;
+  points.reserve(g.indices.size());
+  for (const std::uint32_t j : g.indices) points.push_back(in.scan_points[j]);
+  const KdTree tree(points);
+  NormalSettings settings;
+  settings.viewpoint = *in.scan_viewpoint;
+  settings.threads = threads;
+  return estimate_normals(tree, settings).normals;
+}
+
 Support support_of(const FieldRefinementInput& in, const FieldPrediction& pred, const ScanGrid& g,
                    std::size_t i, double thickness, const FieldRefinementSettings& s,
-                   std::vector<double>& r) {
+                   const std::vector<Vec3>& normals, std::vector<double>& r) {
   r.clear();
-  const std::vector<Vec3>* scan_normals =
-      thickness > 0.0 && in.scan_normals && in.scan_normals->size() == in.scan_points.size()
-          ? in.scan_normals
-          : nullptr;
+  const bool use_normals = thickness > 0.0 && normals.size() == g.indices.size();
   const double window = normal_window(s, thickness);
   int far_side = 0;
   const Transform& M = pred.motion[i];
@@ -193,12 +216,12 @@ Support support_of(const FieldRefinementInput& in, const FieldPrediction& pred, 
             expected = sign * uq.normalized();
           }
           if (std::abs(res) > window) continue;
-          if (scan_normals) {
+          if (use_normals) {
             // A scanner sees a surface from outside the material only: a scan normal against
             // this skin's outward normal was seen from the other side of the sheet (the far
             // skin); one across it lies on another face (a skin beside a sheet edge or a hole
             // wall, or that wall beside a skin), whose points the window does not separate.
-            const double cos_in = expected.dot(Rt * (*scan_normals)[g.indices[k]]);
+            const double cos_in = expected.dot(Rt * normals[k]);
             if (cos_in < 0.0) ++far_side;
             if (cos_in < kMinNormalCosine) continue;
           }
@@ -249,12 +272,15 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
   const ScanGrid grid = build_grid(centers, reach, in.scan_points, s.threads);
 
   const std::vector<double> thickness = face_thickness(in.segmentation);
+  const bool solid =
+      std::any_of(thickness.begin(), thickness.end(), [](double t) { return t > 0; });
+  const std::vector<Vec3> normals = grid_normals(in, grid, solid, s.threads);
   std::vector<Support> support(n);
   for_each_block(n, 16, s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::vector<double> scratch;
     for (std::size_t i = begin; i < end; ++i)
-      support[i] =
-          support_of(in, pred, grid, i, thickness_at(thickness, in.model_faces[i]), s, scratch);
+      support[i] = support_of(in, pred, grid, i, thickness_at(thickness, in.model_faces[i]), s,
+                              normals, scratch);
   });
   std::vector<std::uint32_t> partner(n, kNoScan);
   for (const auto& v : raw.vectors) partner[v.model_index] = v.scan_index;

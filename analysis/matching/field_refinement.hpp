@@ -55,6 +55,10 @@ struct FieldRefinementInput {
   /// Their exact normals; with the faces, the curvature of a hole wall or a rounded sheet edge
   /// is taken out of its normal offsets. Null or empty: those faces are taken as flat.
   const std::vector<Vec3>* model_sample_normals = nullptr;
+  /// Where the scanner looked from (result frame). A scan of a solid without normals (the laser
+  /// driver gives points only) gets them estimated here, for the scan points near the
+  /// predictions only, turned toward this point; null: none estimated (position rule alone).
+  const Vec3* scan_viewpoint = nullptr;
 };
 
 /// The refined field: `vectors` replaced by one refined vector per covered control point
