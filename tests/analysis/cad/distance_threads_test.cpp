@@ -22,13 +22,14 @@
 #include "analysis/core/parallel.hpp"
 #include "analysis/deviation/deviation.hpp"
 #include "tests/analysis/cad_test_util.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 
 namespace springscan::analysis {
 namespace {
 
 using testing::shared_cad;
 
-#if defined(__SANITIZE_ADDRESS__) || defined(SPRINGSCAN_TSAN)
+#if defined(SPRINGSCAN_UNDER_ASAN) || defined(SPRINGSCAN_TSAN)
 // The sanitizers run this code 5 to 15 times slower (about 5 s a part under ThreadSanitizer).
 // TSan cannot see inside OpenCASCADE (not instrumented); it reports a race of our own code on the
 // first overlapping access, so two repetitions suffice there.

@@ -6,6 +6,7 @@
 
 #include "analysis/registration/pca.hpp"
 #include "tests/analysis/synthetic.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -126,7 +127,7 @@ TEST(GlobalFit, HalfOfABentProfileIsPlacedWhereItBelongs) {
 // (20k under the sanitizers, which run it about 10x slower) from any pose: rotation within 0.01
 // degrees, translation within 0.01 mm (at 200k), model and scan sampled independently.
 TEST(GlobalFit, NoisyScanWithOutliersFromAnyPoseWithinAHundredth) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(SPRINGSCAN_UNDER_ASAN)
   // A tenth of the points: the noise averages down sqrt(10) times less, so the bounds widen by
   // that (the 200k bounds are the issue's; a 20k fit measured 0.011 mm).
   constexpr std::size_t kScanPoints = 20'000;
