@@ -95,8 +95,8 @@ double edge_along(std::vector<double>& s, bool upper) {
   return upper ? -edge : edge;
 }
 
-// Where a set of points ends along d, cell by cell of the plane normal to d (a strip along d
-// per cell): the key of a point's cell.
+// The key of the cell of the plane normal to d (u, v spanning it) that p falls in: each cell,
+// `strip_mm` square, is a strip of the part along d.
 std::int64_t strip_key(const Vec3& p, const Vec3& u, const Vec3& v, double strip_mm) {
   const auto a = static_cast<std::int64_t>(std::floor(u.dot(p) / strip_mm));
   const auto b = static_cast<std::int64_t>(std::floor(v.dot(p) / strip_mm));
