@@ -3,8 +3,10 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
+#include <unordered_map>
 
 #include "analysis/core/parallel.hpp"
 #include "analysis/registration/facing.hpp"
@@ -32,15 +34,73 @@ IcpPairSearch exact_surface_pairs(const PartModel& model, double max_distance_mm
   };
 }
 
+// The points of `source` by cell of the plane normal to `axis`, cells `cell_mm` square.
+std::unordered_map<std::int64_t, std::vector<std::uint32_t>> cells_across(
+    const std::vector<Vec3>& source, const Vec3& axis, double cell_mm) {
+  const Vec3 u = axis.unitOrthogonal(), v = axis.cross(u);
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> cells;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    const auto a = static_cast<std::int64_t>(std::floor(u.dot(source[i]) / cell_mm));
+    const auto b = static_cast<std::int64_t>(std::floor(v.dot(source[i]) / cell_mm));
+    cells[(a << 32) ^ (b & 0xffffffff)].push_back(static_cast<std::uint32_t>(i));
+  }
+  return cells;
+}
+
+// Both skins of a standing flange seen (two passes from both sides, no scan normals): per cell
+// of the flange's plane, its points' heights along the flange normal fall in two layers one
+// sheet thickness apart, the material between them. Marks the points of the upper layer +1 (the
+// skin facing +axis) and of the lower -1; 0 where a cell shows one layer (the caller's vote
+// decides there). Two layers: the largest gap between sorted heights at least half the
+// thickness, the layers' medians 0.6-1.4 thicknesses apart, each layer at least kMinLayerPoints
+// and a tenth of the cell (stray points and outliers make no layer). Cells of 4 mm, or 8 and 16
+// mm until half the points lie in cells of kMinCellPoints (the local fits get thinned points:
+// the front panel's walls had 6 a 4 mm cell).
+std::vector<int> skin_layers(const std::vector<Vec3>& source, const Vec3& axis, double thickness) {
+  constexpr std::size_t kMinLayerPoints = 5;
+  constexpr std::size_t kMinCellPoints = 20;
+  std::vector<int> side(source.size(), 0);
+  if (!(thickness > 0.0)) return side;
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> cells;
+  for (const double cell_mm : {4.0, 8.0, 16.0}) {
+    cells = cells_across(source, axis, cell_mm);
+    std::size_t in_full_cells = 0;
+    for (const auto& [key, members] : cells)
+      if (members.size() >= kMinCellPoints) in_full_cells += members.size();
+    if (2 * in_full_cells >= source.size()) break;
+  }
+  std::vector<std::pair<double, std::uint32_t>> h;
+  for (auto& [key, members] : cells) {
+    if (members.size() < 2 * kMinLayerPoints) continue;
+    h.clear();
+    for (const std::uint32_t i : members) h.emplace_back(axis.dot(source[i]), i);
+    std::sort(h.begin(), h.end());
+    std::size_t split = 0;
+    double gap = 0.0;
+    for (std::size_t k = 1; k < h.size(); ++k)
+      if (h[k].first - h[k - 1].first > gap) gap = h[k].first - h[k - 1].first, split = k;
+    const std::size_t lower = split, upper = h.size() - split;
+    const std::size_t least = std::max(kMinLayerPoints, h.size() / 10);
+    if (gap < 0.5 * thickness || lower < least || upper < least) continue;
+    const double apart = h[split + upper / 2].first - h[lower / 2].first;
+    if (apart < 0.6 * thickness || apart > 1.4 * thickness) continue;
+    for (std::size_t k = 0; k < h.size(); ++k) side[h[k].second] = k < split ? -1 : 1;
+  }
+  return side;
+}
+
 // On a solid sheet both skins of a flange lie within a sheet thickness of its scan points, and
 // a nearest-sample pair may cross the sheet: the fit then settles between the skins (its rms
 // near half the thickness). The skin the scan sees is the one most points' nearest samples lie
 // on (only the sample spacing separates a point from it, the thickness adds to the other's);
-// every point then pairs only with samples facing that way (registration/facing.hpp). A scan
-// that brings its normals (toward the scanner) says it per point instead: two passes from both
-// sides of a standing flange see both of its skins. A surface model has one skin: nearest pairs.
+// every point then pairs only with samples facing that way (registration/facing.hpp). Where a
+// cell of the flange shows both skins as two layers (skin_layers: a standing flange seen from
+// both sides by two passes, without scan normals), each layer takes its own skin: the vote
+// gave all of them one, and the front panel's and cover flange's walls fitted between their
+// skins at rms 1 mm. A scan that brings its normals (toward the scanner) says it per point
+// instead. A surface model has one skin: nearest pairs.
 std::vector<Vec3> seen_side_normals(const KdTree& tree, const std::vector<Vec3>& normals,
-                                    const std::vector<Vec3>& source) {
+                                    const std::vector<Vec3>& source, double thickness) {
   // The flange's normal direction, sign aside: the principal axis of the nearest samples'
   // normals (edge and hole faces among them weigh little).
   std::vector<std::uint32_t> nearest(source.size());
@@ -56,7 +116,12 @@ std::vector<Vec3> seen_side_normals(const KdTree& tree, const std::vector<Vec3>&
     const double c = normals[j].dot(axis);
     if (std::abs(c) > 0.5) votes += c > 0.0 ? 1 : -1;
   }
-  return std::vector<Vec3>(source.size(), votes >= 0 ? axis : Vec3(-axis));
+  const Vec3 voted = votes >= 0 ? axis : Vec3(-axis);
+  std::vector<Vec3> out(source.size(), voted);
+  const std::vector<int> layer = skin_layers(source, axis, thickness);
+  for (std::size_t i = 0; i < source.size(); ++i)
+    if (layer[i] != 0) out[i] = layer[i] > 0 ? axis : Vec3(-axis);
+  return out;
 }
 
 std::optional<Error> check_inputs(const LocalFitTarget& target, const PointCloud& scan,
@@ -87,7 +152,12 @@ LocalFitTarget::LocalFitTarget(const PartModel& model)
     : model_(&model),
       tree_(model.samples.points),
       two_skins_(std::any_of(model.segmentation.flanges.begin(), model.segmentation.flanges.end(),
-                             [](const Flange& f) { return f.thickness_mm > 0.0; })) {}
+                             [](const Flange& f) { return f.thickness_mm > 0.0; })) {
+  for (const Flange& f : model.segmentation.flanges)
+    if (f.thickness_mm > 0.0 &&
+        (sheet_thickness_mm_ == 0.0 || f.thickness_mm < sheet_thickness_mm_))
+      sheet_thickness_mm_ = f.thickness_mm;
+}
 
 IcpSettings icp_settings(const LocalFitSettings& st) {
   IcpSettings s;
@@ -132,7 +202,8 @@ Expected<LocalFitResult> local_fit(const LocalFitTarget& target, const PointClou
   if (facing && scan.normals.size() == scan.size()) {
     for (std::uint32_t i : indices) seen.push_back(scan.normals[i]);
   } else if (facing) {
-    seen = seen_side_normals(target.tree(), model.samples.normals, source);
+    seen = seen_side_normals(target.tree(), model.samples.normals, source,
+                             target.sheet_thickness_mm());
   }
   const IcpPairSearch search = exact ? exact_surface_pairs(model, st.max_correspondence_distance_mm)
                                : facing

@@ -55,11 +55,14 @@ class LocalFitTarget {
   const KdTree& tree() const { return tree_; }
   /// The model is a solid sheet (a flange has two skins): pairs follow the facing rule.
   bool two_skins() const { return two_skins_; }
+  /// The thinnest flange's thickness (0 for a surface model): how far apart the two skins are.
+  double sheet_thickness_mm() const { return sheet_thickness_mm_; }
 
  private:
   const PartModel* model_;
   KdTree tree_;
   bool two_skins_ = false;
+  double sheet_thickness_mm_ = 0.0;
 };
 
 struct LocalFitResult {
