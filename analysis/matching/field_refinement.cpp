@@ -164,14 +164,13 @@ std::vector<bool> near_other_face(const FieldRefinementInput& in, double reach) 
 
 // The normals of the grid's scan points (by position in g.indices, result frame, toward the
 // scanner): the scan's own, or on a solid without them estimated (k nearest, turned toward the
-// viewpoint) for the points in the cells of control points near another face (`needed`), zero
-// elsewhere. On the side panel's 1M points the field took 81 ms so, 120 ms with every grid
-// point estimated (bench_production).
-// A sheet edge's points get a normal between its skin's and its rim's; the cone still parts the
-// two faces beyond a neighbourhood from the edge. Empty: none (a surface model needs none).
+// viewpoint) for the points in the cells of control points near another face (within
+// `face_reach`, near_other_face), zero elsewhere. On the side panel's 1M points the field took 81
+// ms so, 120 ms with every grid point estimated (bench_production). A sheet edge's points get a
+// normal between its skin's and its rim's; the cone still parts the two faces beyond a
+// neighbourhood from the edge. Empty: none (a surface model needs none).
 std::vector<Vec3> grid_normals(const FieldRefinementInput& in, const ScanGrid& g,
-                               const std::vector<Vec3>& centers, const std::vector<bool>& needed,
-                               int threads) {
+                               const std::vector<Vec3>& centers, double face_reach, int threads) {
   std::vector<Vec3> out;
   if (in.scan_normals && in.scan_normals->size() == in.scan_points.size()) {
     out.reserve(g.indices.size());
@@ -179,6 +178,8 @@ std::vector<Vec3> grid_normals(const FieldRefinementInput& in, const ScanGrid& g
     return out;
   }
   if (!in.scan_viewpoint) return out;
+  // Only a points-only scan pays for this (a tree over the samples, a query per control point).
+  const std::vector<bool> needed = near_other_face(in, face_reach);
   std::vector<std::uint8_t> bucket_needed(g.offsets.size(), 0);
   for (std::size_t i = 0; i < centers.size(); ++i) {
     Eigen::Array3i c;
@@ -324,8 +325,7 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
   const bool solid =
       std::any_of(thickness.begin(), thickness.end(), [](double t) { return t > 0; });
   const std::vector<Vec3> normals =
-      solid ? grid_normals(in, grid, centers, near_other_face(in, 1.5 * reach), s.threads)
-            : std::vector<Vec3>{};
+      solid ? grid_normals(in, grid, centers, 1.5 * reach, s.threads) : std::vector<Vec3>{};
   std::vector<Support> support(n);
   for_each_block(n, 16, s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::vector<double> scratch;
