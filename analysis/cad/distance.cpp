@@ -33,30 +33,42 @@ class CadDistance final : public SurfaceDistance {
   }
 
   SurfaceHit closest(const Vec3& query) const override {
+    return closest_within(query, std::numeric_limits<double>::infinity());
+  }
+
+  SurfaceHit closest_within(const Vec3& query, double bound_mm) const override {
+    // A surface point within bound_mm puts the nearest triangle within bound_mm + its slack.
+    const double mesh_bound = bound_mm + max_slack_;
     std::array<Candidate, kMaxCandidates> candidates;
     int count = 0;
     const auto& faces = shape_.mesh().triangle_faces;
-    const double nearest = bvh_.near(query, max_slack_, [&](const TriangleFoot& foot) {
-      const int face = faces[foot.triangle];
-      int worst = 0;
-      for (int i = 0; i < count; ++i) {
-        if (candidates[i].face == face) {
-          if (foot.squared_distance < candidates[i].foot.squared_distance)
-            candidates[i].foot = foot;
-          return;
-        }
-        if (candidates[i].foot.squared_distance > candidates[worst].foot.squared_distance)
-          worst = i;
-      }
-      if (count < kMaxCandidates) {
-        candidates[count++] = {face, foot};
-      } else if (foot.squared_distance < candidates[worst].foot.squared_distance) {
-        candidates[worst] = {face, foot};
-      }
-    });
+    const double nearest = bvh_.near(
+        query, max_slack_,
+        [&](const TriangleFoot& foot) {
+          const int face = faces[foot.triangle];
+          int worst = 0;
+          for (int i = 0; i < count; ++i) {
+            if (candidates[i].face == face) {
+              if (foot.squared_distance < candidates[i].foot.squared_distance)
+                candidates[i].foot = foot;
+              return;
+            }
+            if (candidates[i].foot.squared_distance > candidates[worst].foot.squared_distance)
+              worst = i;
+          }
+          if (count < kMaxCandidates) {
+            candidates[count++] = {face, foot};
+          } else if (foot.squared_distance < candidates[worst].foot.squared_distance) {
+            candidates[worst] = {face, foot};
+          }
+        },
+        mesh_bound);
+    // Ties by face: at an edge two faces are equally near, and the order in which the search
+    // met them (which its bound changes) must not decide which face the hit names.
     std::sort(candidates.begin(), candidates.begin() + count,
               [](const Candidate& a, const Candidate& b) {
-                return a.foot.squared_distance < b.foot.squared_distance;
+                return a.foot.squared_distance < b.foot.squared_distance ||
+                       (a.foot.squared_distance == b.foot.squared_distance && a.face < b.face);
               });
     SurfaceHit hit;
     hit.signed_distance_mm = std::numeric_limits<double>::infinity();

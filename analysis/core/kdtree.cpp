@@ -1,5 +1,6 @@
 #include "analysis/core/kdtree.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <nanoflann.hpp>
@@ -47,6 +48,90 @@ class NearestWithin {
   double best_;
   std::uint32_t index_ = 0;
   bool found_ = false;
+};
+
+// NearestWithin, counting only points whose normal has a positive dot product with a direction.
+// With a rank limit it also keeps the `rank` smallest distances of the other points it is offered
+// below the best so far: the search offers every point closer than the final best, so the best
+// is among the rank nearest unless all rank of those lie below it. One pass, pruned by the best.
+class NearestAlong {
+ public:
+  static constexpr std::size_t kMaxRank = 32;
+  NearestAlong(double max_squared_distance, const std::vector<Vec3>& normals, const Vec3& direction,
+               std::size_t rank)
+      : best_(max_squared_distance),
+        normals_(normals),
+        direction_(direction),
+        rank_(std::min(rank, kMaxRank)) {}
+  bool addPoint(double squared_distance, std::uint32_t index) {
+    if (!(squared_distance < best_)) return true;
+    if (normals_[index].dot(direction_) > 0.0) {
+      best_ = squared_distance;
+      index_ = index;
+      found_ = true;
+    } else if (rank_ > 0) {
+      keep_closer(squared_distance);
+    }
+    return true;
+  }
+  double worstDist() const { return best_; }
+  bool full() const { return true; }
+  // Found, and (with a rank limit) fewer than `rank` other points closer.
+  bool found() const {
+    return found_ && !(rank_ > 0 && closer_ == rank_ && other_[rank_ - 1] < best_);
+  }
+  Neighbor neighbor() const { return {index_, best_}; }
+
+ private:
+  void keep_closer(double squared_distance) {
+    if (closer_ == rank_ && !(squared_distance < other_[rank_ - 1])) return;
+    std::size_t i = closer_ < rank_ ? closer_++ : rank_ - 1;
+    for (; i > 0 && other_[i - 1] > squared_distance; --i) other_[i] = other_[i - 1];
+    other_[i] = squared_distance;
+  }
+  double best_;
+  const std::vector<Vec3>& normals_;
+  const Vec3& direction_;
+  std::size_t rank_, closer_ = 0;
+  std::array<double, kMaxRank> other_{};
+  std::uint32_t index_ = 0;
+  bool found_ = false;
+};
+
+// The k nearest points whose normal agrees with a direction, closest first (insertion into a
+// short sorted list: k is a handful).
+class KnnAlong {
+ public:
+  KnnAlong(std::size_t k, std::uint32_t* indices, double* squared_distances,
+           const std::vector<Vec3>& normals, const Vec3& direction)
+      : k_(k),
+        indices_(indices),
+        d2_(squared_distances),
+        normals_(normals),
+        direction_(direction) {}
+  bool addPoint(double squared_distance, std::uint32_t index) {
+    if (squared_distance >= worstDist() || !(normals_[index].dot(direction_) > 0.0)) return true;
+    std::size_t i = count_ < k_ ? count_++ : k_ - 1;
+    for (; i > 0 && d2_[i - 1] > squared_distance; --i) {
+      d2_[i] = d2_[i - 1];
+      indices_[i] = indices_[i - 1];
+    }
+    d2_[i] = squared_distance;
+    indices_[i] = index;
+    return true;
+  }
+  double worstDist() const {
+    return count_ < k_ ? std::numeric_limits<double>::infinity() : d2_[k_ - 1];
+  }
+  bool full() const { return count_ == k_; }
+  std::size_t size() const { return count_; }
+
+ private:
+  std::size_t k_, count_ = 0;
+  std::uint32_t* indices_;
+  double* d2_;
+  const std::vector<Vec3>& normals_;
+  const Vec3& direction_;
 };
 
 }  // namespace
@@ -111,6 +196,28 @@ void KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out
   impl_->index.radiusSearch(query.data(), r2, found, nanoflann::SearchParams(32, 0.0f, true));
   out.reserve(found.size());
   for (const auto& [index, d2] : found) out.push_back({index, d2});
+}
+
+std::optional<Neighbor> KdTree::nearest_along(const Vec3& query, const std::vector<Vec3>& normals,
+                                              const Vec3& direction, double max_distance,
+                                              std::size_t max_rank) const {
+  if (empty() || !(max_distance > 0.0) || normals.size() != size()) return std::nullopt;
+  const double bound = max_distance == std::numeric_limits<double>::infinity()
+                           ? std::numeric_limits<double>::infinity()
+                           : max_distance * max_distance;
+  NearestAlong result(bound, normals, direction, max_rank);
+  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  if (!result.found()) return std::nullopt;
+  return result.neighbor();
+}
+
+std::size_t KdTree::knn_along(const Vec3& query, const std::vector<Vec3>& normals,
+                              const Vec3& direction, std::size_t k, std::uint32_t* indices,
+                              double* squared_distances) const {
+  if (empty() || k == 0 || normals.size() != size()) return 0;
+  KnnAlong result(k, indices, squared_distances, normals, direction);
+  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  return result.size();
 }
 
 // ---- WeightedKdTree: (p, sqrt(w)) in 4-D --------------------------------------------------

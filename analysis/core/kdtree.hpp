@@ -54,6 +54,21 @@ class KdTree {
   /// Every point within `radius` (mm, inclusive), closest first. `out` is overwritten.
   void radius(const Vec3& query, double radius, std::vector<Neighbor>& out) const;
 
+  /// The nearest point closer than `max_distance` whose normal (`normals`, one per tree point)
+  /// has a positive dot product with `direction`, or nothing; with `max_rank` > 0, only when it
+  /// is among the query's max_rank nearest points of any normal. The normal test runs inside the
+  /// search, so the search prunes by the nearest such point (a one-sided scan of a solid and the
+  /// skin it sees: registration/facing.hpp), in one pass. max_rank is at most 32.
+  std::optional<Neighbor> nearest_along(
+      const Vec3& query, const std::vector<Vec3>& normals, const Vec3& direction,
+      double max_distance = std::numeric_limits<double>::infinity(),
+      std::size_t max_rank = 0) const;
+
+  /// The k nearest points whose normal agrees with `direction` as in nearest_along, closest
+  /// first, into `indices` and `squared_distances` (room for k each); returns how many.
+  std::size_t knn_along(const Vec3& query, const std::vector<Vec3>& normals, const Vec3& direction,
+                        std::size_t k, std::uint32_t* indices, double* squared_distances) const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -56,6 +56,13 @@ class SurfaceDistance {
   virtual ~SurfaceDistance() = default;
   /// The closest surface point to `query` (CAD frame, mm).
   virtual SurfaceHit closest(const Vec3& query) const = 0;
+  /// closest(query), told that the surface has a point within `bound_mm` of the query (for a
+  /// run of neighbouring queries: the distance to the previous one's foot), which lets an
+  /// implementation prune its search from the start. The answer is the same.
+  virtual SurfaceHit closest_within(const Vec3& query, double bound_mm) const {
+    (void)bound_mm;
+    return closest(query);
+  }
 };
 
 /// Everything the pipeline needs of the CAD side.

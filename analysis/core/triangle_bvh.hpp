@@ -48,8 +48,12 @@ class TriangleBvh {
   /// Calls `on_triangle(const TriangleFoot&)` for every triangle whose distance is at most the
   /// nearest distance plus `slack_mm` (plus possibly some farther ones seen before the nearest
   /// was found: filter on the final nearest distance, which is returned). Closer subtrees first.
+  /// `bound_mm`: a distance the nearest triangle is known to lie within (infinity: none), so
+  /// that the search prunes from the start; a bound below the nearest distance finds nothing
+  /// and returns the bound.
   template <typename OnTriangle>
-  double near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle) const;
+  double near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle,
+              double bound_mm = std::numeric_limits<double>::infinity()) const;
 
  private:
   struct Node {
@@ -68,9 +72,10 @@ class TriangleBvh {
 };
 
 template <typename OnTriangle>
-double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle) const {
+double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle,
+                         double bound_mm) const {
   if (nodes_.empty()) return 0.0;
-  double best = std::numeric_limits<double>::infinity();
+  double best = bound_mm;
   const auto bound2 = [&] {
     const double r = best + slack_mm;
     return r * r;

@@ -172,12 +172,22 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
   }
   result.signed_distance_mm.resize(scan_in_cad.size());
   if (result.exact) {
-    parallel_blocks(scan_in_cad.size(), settings.threads,
-                    [&](std::size_t, std::size_t begin, std::size_t end) {
-                      for (std::size_t i = begin; i < end; ++i)
-                        result.signed_distance_mm[i] =
-                            model.distance->closest(scan_in_cad[i]).signed_distance_mm;
-                    });
+    // A scan comes line by line: the previous point's foot bounds the next point's distance,
+    // and that bound prunes the search (SurfaceDistance::closest_within).
+    parallel_blocks(
+        scan_in_cad.size(), settings.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+          Vec3 previous_foot = Vec3::Zero();
+          bool have_foot = false;
+          for (std::size_t i = begin; i < end; ++i) {
+            const Vec3& q = scan_in_cad[i];
+            const SurfaceHit hit =
+                have_foot ? model.distance->closest_within(q, (q - previous_foot).norm())
+                          : model.distance->closest(q);
+            result.signed_distance_mm[i] = hit.signed_distance_mm;
+            have_foot = std::isfinite(hit.signed_distance_mm);
+            previous_foot = hit.foot;
+          }
+        });
   } else {
     // Tangent plane of the nearest sample: exact on flat faces, and the sign says whether the
     // point lies above or below the surface (paper §3, Figure 7 colouring).

@@ -1,6 +1,5 @@
 #include "analysis/registration/facing.hpp"
 
-#include <array>
 #include <limits>
 
 namespace springscan::analysis {
@@ -9,25 +8,14 @@ std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec
                                        const Vec3& query, const Vec3& normal,
                                        double max_distance_mm) {
   if (normal.isZero()) return tree.nearest(query, max_distance_mm);
-  std::array<std::uint32_t, kFacingNeighbors> index{};
-  std::array<double, kFacingNeighbors> d2{};
-  const std::size_t found = tree.knn(query, kFacingNeighbors, index.data(), d2.data());
-  const double limit2 = max_distance_mm * max_distance_mm;
-  for (std::size_t k = 0; k < found && d2[k] <= limit2; ++k)
-    if (normals[index[k]].dot(normal) > 0.0) return Neighbor{index[k], d2[k]};
-  return std::nullopt;
+  return tree.nearest_along(query, normals, normal, max_distance_mm, kFacingRank);
 }
 
 double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& normals,
                                const Vec3& query, const Vec3& normal) {
-  std::array<std::uint32_t, kFacingNeighbors> index{};
-  std::array<double, kFacingNeighbors> d2{};
-  const std::size_t found = tree.knn(query, kFacingNeighbors, index.data(), d2.data());
-  if (found == 0) return std::numeric_limits<double>::infinity();
-  if (normal.isZero()) return d2[0];
-  for (std::size_t k = 0; k < found; ++k)
-    if (normals[index[k]].dot(normal) > 0.0) return d2[k];
-  return d2[found - 1];
+  const auto hit =
+      normal.isZero() ? tree.nearest(query) : tree.nearest_along(query, normals, normal);
+  return hit ? hit->squared_distance : std::numeric_limits<double>::infinity();
 }
 
 IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,

@@ -18,20 +18,20 @@
 
 namespace springscan::analysis {
 
-/// How many nearest samples are searched for one that faces the point's way: both skins
-/// together hold about twice the samples of one within any radius.
-inline constexpr std::size_t kFacingNeighbors = 16;
+/// A scan point whose kFacingRank nearest samples all face away lies off its skin (at an edge, or
+/// with a poorly estimated normal): it gets no pair rather than one across the part.
+inline constexpr std::size_t kFacingRank = 16;
 
 /// The nearest of `tree`'s points within `max_distance` whose normal (`normals`, one per point)
-/// has a positive dot product with `normal`, among its kFacingNeighbors nearest; the nearest
-/// point when `normal` is zero (a scan point whose normal is undefined). Nothing otherwise.
+/// has a positive dot product with `normal`, when it is among the query's kFacingRank nearest
+/// (KdTree::nearest_along); the nearest point when `normal` is zero (a scan point whose normal
+/// is undefined). Nothing otherwise.
 std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec3>& normals,
                                        const Vec3& query, const Vec3& normal,
                                        double max_distance_mm);
 
 /// The squared distance from `query` to the nearest sample facing `normal` (as nearest_facing,
-/// no limit); when none of the searched samples faces that way, the squared distance to the
-/// farthest of them, a lower bound (a score counts the point as at least that far off).
+/// no limit); infinity when no sample faces that way.
 double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& normals,
                                const Vec3& query, const Vec3& normal);
 

@@ -52,17 +52,17 @@ namespace {
 // the nearest sample).
 double best_sample(const KdTree& tree, const std::vector<Vec3>& normals, double spacing_mm,
                    double cap2, const Vec3& q, const Vec3& facing, std::uint32_t& best) {
-  std::array<std::uint32_t, kFacingNeighbors> index{};
-  std::array<double, kFacingNeighbors> d2{};
-  const bool rule = !facing.isZero();
-  const std::size_t found =
-      tree.knn(q, rule ? kFacingNeighbors : kScoreNeighbors, index.data(), d2.data());
+  std::array<std::uint32_t, kScoreNeighbors> index{};
+  std::array<double, kScoreNeighbors> d2{};
+  std::size_t found = facing.isZero() ? 0
+                                      : tree.knn_along(q, normals, facing, kScoreNeighbors,
+                                                       index.data(), d2.data());
+  // Without the rule, or where no sample at all faces the point's way: the nearest ones.
+  if (found == 0) found = tree.knn(q, kScoreNeighbors, index.data(), d2.data());
   const bool planes = normals.size() == tree.size();
   double e2 = cap2;
   best = index[0];
-  for (std::size_t k = 0, considered = 0; k < found && considered < kScoreNeighbors; ++k) {
-    if (rule && !(normals[index[k]].dot(facing) > 0.0)) continue;
-    ++considered;
+  for (std::size_t k = 0; k < found; ++k) {
     const Vec3 d = q - tree.points()[index[k]];
     const double beyond = std::max(0.0, std::sqrt(d2[k]) - spacing_mm);
     const double across = planes ? normals[index[k]].dot(d) : std::sqrt(d2[k]);

@@ -135,6 +135,34 @@ TEST(CadDistance, AgreesWithDenseSamplesOnARealPart) {
   EXPECT_GT(negative, 980);
 }
 
+// The deviation stage's coherent queries: each told the distance to the previous query's foot
+// (a point of the surface). Near the surface in sample order, and at random through the box:
+// the same answer as without the bound.
+TEST(CadDistance, ClosestWithinThePreviousFootIsClosest) {
+  const auto shape = load_cad(shared_cad("nema-17-bracket.step"));
+  ASSERT_TRUE(shape) << shape.message();
+  const auto samples = sample_cad(*shape, {.sample_count = 20000, .seed = 4});
+  ASSERT_TRUE(samples);
+  const auto distance = make_cad_distance(*shape);
+  std::mt19937 rng(6);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  std::vector<Vec3> queries;
+  for (std::size_t i = 0; i < samples->size(); i += 4)
+    queries.push_back(samples->points[i] + Vec3(noise(rng), noise(rng), noise(rng)));
+  const Vec3 lo = shape->report().bbox_min, hi = shape->report().bbox_max;
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
+  for (int i = 0; i < 1000; ++i)
+    queries.push_back(lo + (hi - lo).cwiseProduct(Vec3(u(rng), u(rng), u(rng))));
+  Vec3 previous = distance->closest(queries[0]).foot;
+  for (std::size_t i = 1; i < queries.size(); ++i) {
+    const SurfaceHit plain = distance->closest(queries[i]);
+    const SurfaceHit bounded = distance->closest_within(queries[i], (queries[i] - previous).norm());
+    ASSERT_EQ(bounded.signed_distance_mm, plain.signed_distance_mm) << i;
+    EXPECT_EQ(bounded.face_id, plain.face_id) << i;
+    previous = plain.foot;
+  }
+}
+
 TEST(CadDistance, ParallelEqualsSerialAndEmpty) {
   const auto shape = make_profile_shape(hat_profile(20, 30, 40, 90, 4));
   ASSERT_TRUE(shape);

@@ -95,6 +95,63 @@ TEST(KdTree, RadiusMatchesBruteForceAndIsInclusive) {
   }
 }
 
+// Normals at random: about half the points face a query direction. The oracle walks the
+// brute-force order for the first point facing that way.
+TEST(KdTree, NearestAlongMatchesBruteForceWithAndWithoutRank) {
+  const auto points = testing::uniform_points(4000, 21, -50.0, 50.0);
+  std::vector<Vec3> normals = testing::uniform_points(points.size(), 22, -1.0, 1.0);
+  KdTree tree(points);
+  const auto queries = testing::uniform_points(300, 23, -50.0, 50.0);
+  const auto directions = testing::uniform_points(queries.size(), 24, -1.0, 1.0);
+  int rejected_by_rank = 0;
+  for (std::size_t k = 0; k < queries.size(); ++k) {
+    const Vec3& q = queries[k];
+    const Vec3& dir = directions[k];
+    const auto all = brute_force(points, q);
+    std::size_t rank = 0;
+    while (rank < all.size() && !(normals[all[rank].index].dot(dir) > 0.0)) ++rank;
+    ASSERT_LT(rank, all.size());
+    const auto any = tree.nearest_along(q, normals, dir);
+    ASSERT_TRUE(any.has_value());
+    EXPECT_DOUBLE_EQ(any->squared_distance, all[rank].squared_distance);
+    // Within a bound: found only when the bound reaches it.
+    const double d = std::sqrt(all[rank].squared_distance);
+    EXPECT_TRUE(tree.nearest_along(q, normals, dir, d * 1.001).has_value());
+    EXPECT_FALSE(tree.nearest_along(q, normals, dir, d * 0.999).has_value());
+    // Among the 3 nearest of any normal, or nothing.
+    const auto ranked = tree.nearest_along(q, normals, dir, 1e9, 3);
+    EXPECT_EQ(ranked.has_value(), rank < 3) << "rank " << rank;
+    if (ranked) {
+      EXPECT_DOUBLE_EQ(ranked->squared_distance, all[rank].squared_distance);
+    }
+    if (rank >= 3) ++rejected_by_rank;
+  }
+  EXPECT_GT(rejected_by_rank, 0);  // the rank limit was exercised
+  // A point facing nowhere near the direction, and normals of the wrong count: nothing.
+  EXPECT_FALSE(tree.nearest_along(Vec3::Zero(), std::vector<Vec3>(3), Vec3::UnitZ()).has_value());
+}
+
+TEST(KdTree, KnnAlongMatchesBruteForce) {
+  const auto points = testing::uniform_points(3000, 25, -50.0, 50.0);
+  const std::vector<Vec3> normals = testing::uniform_points(points.size(), 26, -1.0, 1.0);
+  KdTree tree(points);
+  const auto queries = testing::uniform_points(100, 27, -50.0, 50.0);
+  const Vec3 dir = Vec3(0.3, -0.2, 0.9).normalized();
+  std::uint32_t index[6];
+  double d2[6];
+  for (const auto& q : queries) {
+    std::vector<double> expected;
+    for (const Neighbor& n : brute_force(points, q))
+      if (normals[n.index].dot(dir) > 0.0 && expected.size() < 6)
+        expected.push_back(n.squared_distance);
+    ASSERT_EQ(tree.knn_along(q, normals, dir, 6, index, d2), 6u);
+    for (std::size_t i = 0; i < 6; ++i) {
+      EXPECT_DOUBLE_EQ(d2[i], expected[i]);
+      EXPECT_GT(normals[index[i]].dot(dir), 0.0);
+    }
+  }
+}
+
 TEST(KdTree, ConcurrentQueriesAgreeWithSerial) {
   const auto points = testing::uniform_points(20000, 9, -50.0, 50.0);
   const auto queries = testing::uniform_points(4000, 10, -50.0, 50.0);
