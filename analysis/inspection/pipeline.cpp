@@ -24,6 +24,7 @@
 #include "analysis/preprocess/reduction.hpp"
 #include "analysis/registration/datum.hpp"
 #include "analysis/registration/global_fit.hpp"
+#include "analysis/registration/orientation_settle.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -327,6 +328,11 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
       pin_to_boundary(scan.points, fit->T_cad_scan, model, model_tree, config->global_fit.boundary);
   if (!pinned) return pinned.error();
   fit->T_cad_scan = pinned->T_cad_scan;
+  // A near-symmetric part's rival orientations compared on converged fits.
+  pinned = settle_orientation(
+      {reduced->scan_for_fit.points, *fit_normals, scan.points, model, model_tree},
+      config->global_fit, *fit, std::move(*pinned));
+  if (!pinned) return pinned.error();
   to_proto(*fit, config->global_fit, report.mutable_global_fit());
   to_proto(pinned->free_directions, report.mutable_global_fit());
   for (const auto& warning : fit->warnings) report.add_warnings(warning);

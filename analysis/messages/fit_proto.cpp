@@ -24,6 +24,7 @@ void to_proto(const GlobalFitResult& fit, const GlobalFitSettings& settings, v1:
   out->set_stop_reason(fit.icp.stop_reason);
   out->set_ambiguous(fit.ambiguous);
   out->set_orientation_ambiguity(fit.orientation.ambiguity);
+  out->set_orientation_decided_by(fit.orientation.decided_by);
 }
 
 void to_proto(const std::vector<FreeDirection>& free, v1::GlobalFit* out) {

@@ -103,6 +103,17 @@ Expected<GlobalFitSettings> from_proto(const v1::RegistrationSettings& m) {
   if (auto error = icp_from_proto(m, s.icp)) return *error;
   if (m.has_pca_initial_alignment()) s.pca_initial_alignment = m.pca_initial_alignment();
   if (m.has_pin_free_directions()) s.boundary.pin_free_directions = m.pin_free_directions();
+  for (int i = 0; i < m.symmetry_features_size(); ++i) {
+    const v1::SymmetryFeature& f = m.symmetry_features(i);
+    const std::string field = "registration.symmetry_features[" + std::to_string(i) + "]";
+    const Vec3 center(f.center().x(), f.center().y(), f.center().z());
+    if (!center.allFinite())
+      return fail(ErrorCode::kInvalidSettings, "settings: " + field + ".center is not finite");
+    if (!in_range(f.radius_mm(), 0.001, 1e5))
+      return bad(field + ".radius_mm", f.radius_mm(), "0.001 to 1e5");
+    s.orientation.symmetry_features.push_back(
+        {f.name().empty() ? "feature " + std::to_string(i + 1) : f.name(), center, f.radius_mm()});
+  }
   return s;
 }
 
@@ -180,6 +191,15 @@ void to_proto(const GlobalFitSettings& s, v1::RegistrationSettings* m) {
   m->set_error_ratio_stop(s.icp.error_ratio_stop);
   m->set_pca_initial_alignment(s.pca_initial_alignment);
   m->set_pin_free_directions(s.boundary.pin_free_directions);
+  m->clear_symmetry_features();
+  for (const SymmetryFeature& f : s.orientation.symmetry_features) {
+    v1::SymmetryFeature* out = m->add_symmetry_features();
+    out->set_name(f.name);
+    out->mutable_center()->set_x(f.center.x());
+    out->mutable_center()->set_y(f.center.y());
+    out->mutable_center()->set_z(f.center.z());
+    out->set_radius_mm(f.radius_mm);
+  }
 }
 
 void to_proto(const SpringbackSettings& s, v1::SpringbackSettings* m) {

@@ -96,6 +96,17 @@ double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T,
   return std::sqrt(sum / static_cast<double>(keep));
 }
 
+Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model_tree,
+                              const std::vector<Vec3>& model_normals, const Transform& start,
+                              const GlobalFitSettings& settings,
+                              const std::vector<Vec3>& scan_normals) {
+  if (scan_normals.empty()) return icp(scan, model_tree, model_normals, start, settings.icp);
+  return icp(scan,
+             nearest_facing_pairs(model_tree, model_normals, scan_normals,
+                                  settings.icp.max_correspondence_distance_mm),
+             start, settings.icp);
+}
+
 Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree& model_tree,
                                      const std::vector<Vec3>& model_normals,
                                      const GlobalFitSettings& settings,
@@ -148,11 +159,7 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
   } else {
     result.rms_after_pca_mm = result.rms_initial_mm;
   }
-  auto fit = facing ? icp(scan,
-                          nearest_facing_pairs(model_tree, model_normals, scan_normals,
-                                               settings.icp.max_correspondence_distance_mm),
-                          start, settings.icp)
-                    : icp(scan, model_tree, model_normals, start, settings.icp);
+  auto fit = final_icp(scan, model_tree, model_normals, start, settings, scan_normals);
   if (!fit) return fit.error().prepend("global fit: ");
   result.icp = std::move(*fit);
   result.T_cad_scan = result.icp.T_target_source;

@@ -56,6 +56,14 @@ Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree
                                      const GlobalFitSettings& settings = {},
                                      const std::vector<Vec3>& scan_normals = {});
 
+/// The global fit's final ICP from `start`: the facing rule with `scan_normals` (one per scan
+/// point), nearest pairs without. global_fit ends with it; registration/orientation_settle.hpp
+/// takes a rival orientation as far.
+Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model_tree,
+                              const std::vector<Vec3>& model_normals, const Transform& start,
+                              const GlobalFitSettings& settings,
+                              const std::vector<Vec3>& scan_normals = {});
+
 /// Root mean square nearest distance of T * points to the tree, mm, over the closest
 /// (1 - trimmed_fraction) of the points (parallel, deterministic).
 double rms_nearest_distance(const std::vector<Vec3>& points, const Transform& T, const KdTree& tree,

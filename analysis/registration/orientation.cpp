@@ -112,6 +112,23 @@ double surface_score(const FacingSample& sample, const Transform& T, const KdTre
 
 }  // namespace
 
+double exact_surface_score(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                           const Transform& T, const SurfaceDistance& exact, double cap_mm) {
+  if (points.empty()) return 0.0;
+  const double cap2 = cap_mm * cap_mm;
+  const bool facing = normals.size() == points.size();
+  double sum = 0.0;  // serial, in a fixed order
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const SurfaceHit hit = exact.closest(T * points[i]);
+    const double d2 = hit.signed_distance_mm * hit.signed_distance_mm;
+    // A foot on a rim between the skins has its normal across the point's: only a clearly
+    // opposed one is the other skin.
+    const bool other_skin = facing && hit.normal.dot(T.linear() * normals[i]) < -0.5;
+    sum += other_skin || !(d2 < cap2) ? cap2 : d2;
+  }
+  return sum / static_cast<double>(points.size());
+}
+
 double robust_surface_score(const std::vector<Vec3>& points, const Transform& T,
                             const KdTree& model_tree, const std::vector<Vec3>& model_normals,
                             double spacing_mm, double cap_mm) {
@@ -170,11 +187,14 @@ Expected<OrientationChoice> choose_orientation(
     if (i == choice.best ||
         rotation_apart_deg(cs[i].T_cad_scan, best.T_cad_scan) <= settings.distinct_pose_deg)
       continue;
-    // Only a candidate that fits within noise of the best is tested for equivalence: the model
-    // moved by the motion between the two, refined onto itself (the two fits carry noise and
-    // springback, so their motion is near the model's symmetry, not on it).
-    const bool within_noise = best.score_mm2 >= settings.ambiguous_error_ratio * cs[i].score_mm2;
-    if (within_noise) {
+    // Only a candidate that fits near the best is tested for equivalence (the others can be
+    // neither ambiguous nor settled): the model moved by the motion between the two, refined onto
+    // itself (the two fits carry noise and springback, so their motion is near the model's
+    // symmetry, not on it).
+    const bool near_best =
+        best.score_mm2 >=
+        std::min(settings.settle_ratio, settings.ambiguous_error_ratio) * cs[i].score_mm2;
+    if (near_best) {
       Transform T_cad_cad = cs[i].T_cad_scan * best.T_cad_scan.inverse();
       T_cad_cad.translation() += centroid - T_cad_cad * centroid;
       auto self_fit = icp(model_sample.points, self_pairs, T_cad_cad, self_settings);
@@ -182,6 +202,7 @@ Expected<OrientationChoice> choose_orientation(
       const double self = surface_score(model_sample, T_cad_cad, model_tree, model_normals, spacing,
                                         settings.score_cap_mm);
       if (std::sqrt(self) <= settings.equivalent_rms_mm) {
+        choice.candidates[i].equivalent = true;
         choice.symmetric_model = true;
         continue;
       }

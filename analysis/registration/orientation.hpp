@@ -7,16 +7,28 @@
 // lies beyond the sample spacing from that sample, capped so that outliers weigh the same for every
 // candidate. Two distinct orientations whose errors are within noise of each other make the
 // part ambiguous, unless the model maps onto itself by the motion between them (a symmetric CAD
-// part: the two are the same answer).
+// part: the two are the same answer). These are short refinements: a near-symmetric part's
+// rivals are then compared on converged fits (registration/orientation_settle.hpp).
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "analysis/core/expected.hpp"
 #include "analysis/core/kdtree.hpp"
+#include "analysis/core/part_model.hpp"
 #include "analysis/registration/icp.hpp"
 
 namespace springscan::analysis {
+
+/// A region of the CAD where a near-symmetric part differs from its turned copy (a hole, a
+/// notch, a tab at one end): rival orientations are judged there (orientation_settle.hpp). CAD
+/// frame, mm.
+struct SymmetryFeature {
+  std::string name;
+  Vec3 center = Vec3::Zero();
+  double radius_mm = 0.0;
+};
 
 struct OrientationSettings {
   std::size_t refine_points = 1000;    ///< scan points (evenly strided) each finalist is refined on
@@ -29,16 +41,30 @@ struct OrientationSettings {
                                        ///< farther)
   double ambiguous_error_ratio = 0.9;  ///< ambiguous when best / next distinct orientation's
                                        ///< mean squared error exceeds this, (0, 1]
-  double distinct_pose_deg = 5.0;      ///< orientations farther apart than this are distinct
-  double equivalent_rms_mm = 0.02;     ///< the model moved by the motion between two finalists
-                                       ///< (centroid kept, refined onto itself) fits itself
-                                       ///< within this robust rms: a symmetric model, the two
-                                       ///< orientations are the same answer
+  double settle_ratio = 0.5;           ///< distinct orientations scoring within this of the best
+                                       ///< (best / theirs above it) are tested for equivalence and
+                                       ///< settled on converged fits
+                                       ///< (registration/orientation_settle.hpp), (0, 1]
+  std::vector<SymmetryFeature> symmetry_features;  ///< the part's, if any (part catalogue)
+  std::size_t feature_points = 10000;    ///< scan points (evenly strided) judged in the features
+  double feature_misfit_mm = 0.1;        ///< a point in a feature farther off the surface misfits,
+  double feature_misfit_sigmas = 4.0;    ///< ... or farther than this many robust sigmas of the
+                                         ///< fit's distances, when that is more
+  std::size_t min_feature_misfits = 10;  ///< the features decide when the orientations' misfit
+                                         ///< counts differ by at least this and the lower is at
+                                         ///< most half the higher (a hole the other one fills)
+  double distinct_pose_deg = 5.0;        ///< orientations farther apart than this are distinct
+  double equivalent_rms_mm = 0.02;       ///< the model moved by the motion between two finalists
+                                         ///< (centroid kept, refined onto itself) fits itself
+                                         ///< within this robust rms: a symmetric model, the two
+                                         ///< orientations are the same answer
 };
 
 struct OrientationCandidate {
   Transform T_cad_scan = Transform::Identity();  ///< after its refinement
   double score_mm2 = 0.0;                        ///< mean squared capped robust error
+  bool equivalent = false;  ///< the model maps onto itself by the motion from the best to this
+                            ///< (tested for candidates within settle_ratio of the best)
 };
 
 struct OrientationChoice {
@@ -49,6 +75,8 @@ struct OrientationChoice {
   bool ambiguous = false;  ///< ambiguity > ambiguous_error_ratio
   bool symmetric_model = false;  ///< a distinct orientation fits as well and the model maps onto
                                  ///< itself by the motion between them (equivalent)
+  std::string decided_by = "surface";  ///< "surface", "converged surface" or "symmetry features"
+                                       ///< (orientation_settle.hpp)
 };
 
 /// Refines every start (at least one) on the same scan sample against `model_tree`, scores all on
@@ -60,6 +88,12 @@ Expected<OrientationChoice> choose_orientation(
     const std::vector<Vec3>& scan, const KdTree& model_tree, const std::vector<Vec3>& model_normals,
     const std::vector<Transform>& starts, const OrientationSettings& settings,
     const IcpSettings& icp_settings, int threads = 0, const std::vector<Vec3>& scan_normals = {});
+
+/// The mean squared capped distance of T * points to the exact surface, mm^2. With `normals` (one
+/// per point: a one-sided scan of a solid) a point whose closest surface faces against its turned
+/// normal (the other skin) counts as cap_mm. Serial.
+double exact_surface_score(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                           const Transform& T, const SurfaceDistance& exact, double cap_mm);
 
 /// The mean squared capped robust error of T * points against the model (tangent-plane distance
 /// to a sample, plus the distance beyond `spacing_mm` from it, the least over the 4 nearest

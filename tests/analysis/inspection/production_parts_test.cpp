@@ -35,6 +35,10 @@ struct PartExpectation {
   double max_residual_mm = 0.1;   ///< the fit's residual to the surface, sigma 0.02 mm
   int measurable_from_below = 0;  ///< bends the two passes from below measure at least
   int measurable_noisy = 0;       ///< ... and the noisy scan
+  /// Its turned copy fits a one-sided scan within noise: reported ambiguous (the part fails)
+  /// rather than found. The side panel: turned over about its sheet normal, 32 of the 200,000
+  /// points of ZeroSpringbackFitsThePose lie more than 0.1 mm off the surface (issue 16).
+  bool near_symmetric = false;
 };
 
 void PrintTo(const PartExpectation& part, std::ostream* os) { *os << part.name; }
@@ -48,7 +52,7 @@ const std::vector<PartExpectation>& expectations() {
       {"openamr-MMP.01.00.00.002_Cover_flange.step", 5, 0.2, 0.2, 0.15, 5, 5},
       // Two of its 16 bends join walls the passes from above do not see (0 points): they say so.
       // From below and in the noisy scan its global fit is reported ambiguous (its half turn).
-      {"openamr-MMP.00.00.00.003_Side_panel.step", 14, 0.05, 0.05, 0.1, 14, 9},
+      {"openamr-MMP.00.00.00.003_Side_panel.step", 14, 0.05, 0.05, 0.1, 14, 9, true},
       {"openamr-MMP.00.00.00.001_Front_panel.step", 4, 0.05, 0.05, 0.1, 4, 4},
       {"nema-17-bracket.step", 1, 0.05, 0.05, 0.1, 1, 1}};
   // Under the sanitizers (5-15x slower) one part: they look for memory errors and races.
@@ -73,8 +77,17 @@ TEST_P(ProductionPart, ZeroSpringbackFitsThePose) {
   centroid /= static_cast<double>(cad.model.samples.size());
   const double rotation_deg = Eigen::AngleAxisd(T.linear()).angle() * 180.0 / std::numbers::pi;
   const double shift_mm = (T * centroid - centroid).norm();
-  std::printf("%s: rotation %.4f deg, shift at the centroid %.4f mm, residual %.4f mm\n",
-              part.name.c_str(), rotation_deg, shift_mm, run.report.global_fit().rms_residual());
+  std::printf(
+      "%s: rotation %.4f deg, shift at the centroid %.4f mm, residual %.4f mm, "
+      "orientation by %s (ratio %.3f)%s\n",
+      part.name.c_str(), rotation_deg, shift_mm, run.report.global_fit().rms_residual(),
+      run.report.global_fit().orientation_decided_by().c_str(),
+      run.report.global_fit().orientation_ambiguity(),
+      run.report.global_fit().ambiguous() ? ", ambiguous" : "");
+  if (part.near_symmetric && run.report.global_fit().ambiguous()) {
+    EXPECT_FALSE(run.report.verdict().pass()) << "an ambiguous fit never passes";
+    return;
+  }
   EXPECT_LE(rotation_deg, part.max_rotation_deg);
   EXPECT_LE(shift_mm, part.max_shift_mm);
   EXPECT_FALSE(run.report.global_fit().ambiguous());
@@ -147,8 +160,9 @@ BendCheck check_bends(const FieldRun& run, double bound, const std::string& what
 // then: the bends are not checked against the truth.
 bool fit_is_trusted(const FieldRun& run, const std::string& what) {
   if (!run.report.global_fit().ambiguous()) return true;
-  std::printf("%s: the global fit is reported ambiguous (ratio %.3f), the part fails\n",
-              what.c_str(), run.report.global_fit().orientation_ambiguity());
+  std::printf("%s: the global fit is reported ambiguous (%s, ratio %.3f), the part fails\n",
+              what.c_str(), run.report.global_fit().orientation_decided_by().c_str(),
+              run.report.global_fit().orientation_ambiguity());
   EXPECT_FALSE(run.report.verdict().pass()) << what << ": an ambiguous fit never passes";
   return false;
 }

@@ -1,0 +1,43 @@
+#pragma once
+// The orientation choice settled on converged fits. The global fit compares its orientation
+// candidates after short refinements (registration/orientation.hpp); along a direction the
+// surface barely fixes (a long panel's length) those stop millimetres apart, and the wrong half
+// turn of a near-symmetric part can score best by where its refinement happened to stop (the
+// openamr side panel, zero springback: its right orientation 0.035 mm^2 at 4-12 mm off along its
+// length, the half turn 0.032). So every distinct orientation that scored within settle_ratio of
+// the best (and that the model does not map onto the best's by a symmetry of its own) is taken
+// as far as the best: the final ICP and the boundary's pinning (registration/boundary.hpp). Then
+// all of them are scored on the same fit points by the same error against the exact CAD surface
+// (exact_surface_score), and the lowest wins. Two that stay within noise of each other
+// (symmetry_warning_ratio) make the part ambiguous.
+//
+// Thread safety: a pure function.
+
+#include <vector>
+
+#include "analysis/core/expected.hpp"
+#include "analysis/core/kdtree.hpp"
+#include "analysis/core/part_model.hpp"
+#include "analysis/registration/boundary.hpp"
+#include "analysis/registration/global_fit.hpp"
+
+namespace springscan::analysis {
+
+struct OrientationSettleInput {
+  const std::vector<Vec3>& fit_points;   ///< the global fit's scan points, scan frame
+  const std::vector<Vec3>& fit_normals;  ///< one per fit point (facing rule), or empty
+  const std::vector<Vec3>& scan;         ///< the whole scan, scan frame (the boundary's ends)
+  const PartModel& model;                ///< with its exact distance; without, nothing is settled
+  const KdTree& model_tree;              ///< over model.samples.points
+};
+
+/// Settles `fit`'s orientation (see above). `pinned`: the boundary's result for fit.T_cad_scan.
+/// Returns the boundary result of the orientation chosen; `fit` then describes it: T_cad_scan
+/// (pinned), icp, rms_final_mm, orientation.best, the settled candidates' score_mm2 (their
+/// converged exact scores), orientation.ambiguity and ambiguous, fit.ambiguous and its warning.
+/// Without a rival (or an exact distance) returns `pinned` and leaves `fit` as it is.
+Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
+                                            const GlobalFitSettings& settings,
+                                            GlobalFitResult& fit, BoundaryResult pinned);
+
+}  // namespace springscan::analysis
