@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "analysis/core/parallel.hpp"
@@ -48,7 +48,7 @@ struct Settled {
   std::size_t candidate = 0;
   IcpResult icp;
   BoundaryResult boundary;
-  double whole_mm2 = 0.0;        // exact score of the fit points
+  double whole_mm2 = 0.0;           // exact score of the fit points
   std::size_t feature_points = 0;   // scan points judged in the symmetry features
   std::size_t feature_misfits = 0;  // ... that lie off the surface by feature_misfit_mm or more
 };
@@ -128,14 +128,14 @@ double rank(const std::vector<Settled>& all, double Settled::*score, std::size_t
 
 void restate_ambiguity(GlobalFitResult& fit) {
   auto& w = fit.warnings;
-  w.erase(std::remove_if(w.begin(), w.end(),
-                         [](const std::string& text) { return text.starts_with(kAmbiguousWarning); }),
-          w.end());
+  w.erase(
+      std::remove_if(w.begin(), w.end(),
+                     [](const std::string& text) { return text.starts_with(kAmbiguousWarning); }),
+      w.end());
   if (!fit.ambiguous) return;
   std::ostringstream text;
   text << kAmbiguousWarning << ": two distinct orientations fit within noise of each other ("
-       << fit.orientation.decided_by << ", robust error ratio " << fit.orientation.ambiguity
-       << ")";
+       << fit.orientation.decided_by << ", robust error ratio " << fit.orientation.ambiguity << ")";
   if (fit.orientation.decided_by != "symmetry features")
     text << "; a part catalogue entry can name the feature that breaks the symmetry "
             "(registration.symmetry_features)";
@@ -145,8 +145,8 @@ void restate_ambiguity(GlobalFitResult& fit) {
 }  // namespace
 
 Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
-                                            const GlobalFitSettings& settings,
-                                            GlobalFitResult& fit, BoundaryResult pinned) {
+                                            const GlobalFitSettings& settings, GlobalFitResult& fit,
+                                            BoundaryResult pinned) {
   OrientationChoice& choice = fit.orientation;
   if (!in.model.distance || choice.candidates.size() < 2) return pinned;
   const std::vector<std::size_t> rivals = rivals_of(choice, settings);

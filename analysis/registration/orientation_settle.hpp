@@ -37,7 +37,7 @@ struct OrientationSettleInput {
 /// converged exact scores), orientation.ambiguity and ambiguous, fit.ambiguous and its warning.
 /// Without a rival (or an exact distance) returns `pinned` and leaves `fit` as it is.
 Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
-                                            const GlobalFitSettings& settings,
-                                            GlobalFitResult& fit, BoundaryResult pinned);
+                                            const GlobalFitSettings& settings, GlobalFitResult& fit,
+                                            BoundaryResult pinned);
 
 }  // namespace springscan::analysis

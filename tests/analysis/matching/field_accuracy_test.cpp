@@ -156,10 +156,18 @@ TEST_P(FieldAccuracy, ZeroSpringbackGivesZeroVectors) {
   FieldScenario sc;
   sc.springback_deg = {0.0};
   sc.pose = random_pose(300u + static_cast<unsigned>(GetParam()));
-  if (c.name.find("Side_panel") != std::string::npos)
-    GTEST_SKIP() << "issue 16, open: at this pose the side panel's global fit finds two "
-                    "orientations within noise (near-symmetry), says so, and takes the wrong one";
   const FieldRun run = testing::run_field_case(cad_of(c), sc);
+  // The side panel's half turn fits this pose's one-sided scan within noise (issue 16, open;
+  // docs/alignment.md "Near-symmetry"): reported ambiguous, the part fails, and its field,
+  // which may be the turned part's, is not checked. Any other part must not be ambiguous.
+  if (run.report.global_fit().ambiguous()) {
+    std::printf("%s: ambiguous (%s, ratio %.3f), the part fails\n", c.name.c_str(),
+                run.report.global_fit().orientation_decided_by().c_str(),
+                run.report.global_fit().orientation_ambiguity());
+    EXPECT_NE(c.name.find("Side_panel"), std::string::npos) << c.name;
+    EXPECT_FALSE(run.report.verdict().pass()) << c.name;
+    return;
+  }
   ASSERT_GT(run.report.deformation_field().vectors_size(), 20) << c.name;
   // Every vector is the truth within 0.05 mm. The truth itself is the result frame's error
   // only: the best fit leaves the translation along an extrusion's bend lines to the sheet's

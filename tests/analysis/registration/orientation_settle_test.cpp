@@ -29,9 +29,11 @@ const UnevenHat& uneven_hat() {
   static const UnevenHat hat = [] {
     UnevenHat h;
     testing::TempDir dir;
-    const parts::ProfileSpec spec{
-        {30.6, 40.0, 60.0, 40.0, 30.0}, {90.0, -90.0, -90.0, 90.0}, {4.0, 4.0, 4.0, 4.0}, 60.0,
-        2.0};
+    const parts::ProfileSpec spec{{30.6, 40.0, 60.0, 40.0, 30.0},
+                                  {90.0, -90.0, -90.0, 90.0},
+                                  {4.0, 4.0, 4.0, 4.0},
+                                  60.0,
+                                  2.0};
     const std::string path = dir.file("uneven-hat.step");
     EXPECT_TRUE(parts::write_profile_cad(spec, path));
     auto model = load_part_model(path);
@@ -112,12 +114,13 @@ TEST(OrientationSettle, SymmetryFeaturesDecideWithAMarginTheWholePartLacks) {
     const Transform pose = testing::random_motion(rng, 300.0);
     const Outcome with = inspect(pose, with_brim_features(), 100u + unsigned(trial));
     const Outcome without = inspect(pose, {}, 100u + unsigned(trial));
-    std::printf("trial %d: with features %.4f deg off, by %s (ratio %.3f); without %.4f deg, "
-                "by %s (ratio %.3f)%s\n",
-                trial, with.rotation_error_deg, with.fit.orientation_decided_by().c_str(),
-                with.fit.orientation_ambiguity(), without.rotation_error_deg,
-                without.fit.orientation_decided_by().c_str(), without.fit.orientation_ambiguity(),
-                without.fit.ambiguous() ? ", ambiguous" : "");
+    std::printf(
+        "trial %d: with features %.4f deg off, by %s (ratio %.3f); without %.4f deg, "
+        "by %s (ratio %.3f)%s\n",
+        trial, with.rotation_error_deg, with.fit.orientation_decided_by().c_str(),
+        with.fit.orientation_ambiguity(), without.rotation_error_deg,
+        without.fit.orientation_decided_by().c_str(), without.fit.orientation_ambiguity(),
+        without.fit.ambiguous() ? ", ambiguous" : "");
     EXPECT_LT(with.rotation_error_deg, 0.5) << "trial " << trial;
     EXPECT_FALSE(with.fit.ambiguous()) << "trial " << trial;
     if (!without.fit.ambiguous()) {
