@@ -248,7 +248,8 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
   std::vector<Datum> datums = settings.datums;
   for (Datum& d : datums) {
     if (d.thickness_mm == 0.0) d.thickness_mm = flange_thickness(d, model);
-    if ((d.kind == DatumKind::kHole || d.kind == DatumKind::kSlot) && d.thickness_mm <= 0.0)
+    // A hole of a surface model is measured by its rim; a slot needs its walls.
+    if (d.kind == DatumKind::kSlot && d.thickness_mm <= 0.0)
       return fail(ErrorCode::kAnalysisFailed,
                   "alignment: datum '" + d.name + "' (" + to_string(d.kind) +
                       "): no wall height (no solid flange at its point; set thickness_mm)");

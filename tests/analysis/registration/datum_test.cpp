@@ -179,6 +179,41 @@ TEST(DatumAlignment, ThreeTwoOneRecoversThePose) {
   }
 }
 
+// A surface model: the plate as one skin, no wall. Its holes are measured by their rims, where
+// the skin's points stop (datum_measure.cpp, measure_hole_rim): the same 3-2-1 frame from the
+// skin alone, with and without the scanner's normals.
+TEST(DatumAlignment, HolesOfASurfaceModelFromTheirRims) {
+  Plate skin_only;
+  const Plate p = plate();
+  for (std::size_t i = 0; i < p.points.size(); ++i)
+    if (p.points[i].z() == 0.0) {
+      skin_only.points.push_back(p.points[i]);
+      skin_only.normals.push_back(p.normals[i]);
+    }
+  PartModel surface = plate_model();
+  surface.segmentation.flanges[0].thickness_mm = 0.0;
+  for (unsigned seed : {11u, 12u}) {
+    const Case c = scan_case(skin_only, seed);
+    for (bool with_normals : {true, false}) {
+      auto r = align_to_datums(c.scan, with_normals ? c.normals : std::vector<Vec3>{}, c.best,
+                               surface, three_two_one());
+      ASSERT_TRUE(r) << r.message();
+      const auto [rot, shift] = frame_error(r->T_cad_scan, c.pose);
+      std::printf("surface model, seed %u%s: %.5f deg %.5f mm, diameters %.3f %.3f\n", seed,
+                  with_normals ? "" : " (points only)", rot, shift,
+                  r->datums[3].measured_diameter_mm, r->datums[4].measured_diameter_mm);
+      // The rim is the skin's points' edge (11 points per mm^2): the frame to a few
+      // hundredths; the diameters a little large (the innermost points lie outside the rim).
+      EXPECT_LE(rot, 0.05);
+      EXPECT_LE(shift, 0.05);
+      for (const auto& [k, nominal] : {std::pair{3, kDiameterA}, std::pair{4, kDiameterB}}) {
+        EXPECT_GE(r->datums[static_cast<std::size_t>(k)].measured_diameter_mm, nominal - 0.02);
+        EXPECT_LE(r->datums[static_cast<std::size_t>(k)].measured_diameter_mm, nominal + 0.3);
+      }
+    }
+  }
+}
+
 // Without the scanner's normals the walls and skins are told apart by position alone.
 TEST(DatumAlignment, PointsOnly) {
   const Case c = scan_case(plate(), 4);
