@@ -55,6 +55,15 @@ std::string candidates_json(const analysis::DatumCandidates& c) {
       << ", \"axis\": " << vec(h.axis) << ", \"diameter_mm\": " << h.diameter_mm
       << ", \"thickness_mm\": " << h.thickness_mm << "}";
   }
+  o << "\n    ],\n    \"slots\": [";
+  for (std::size_t i = 0; i < c.slots.size(); ++i) {
+    const auto& sl = c.slots[i];
+    o << (i ? "," : "") << "\n      {\"faces\": " << ids(sl.face_ids)
+      << ", \"flange\": " << sl.flange_id << ", \"centre\": " << vec(sl.centre)
+      << ", \"axis\": " << vec(sl.axis) << ", \"direction\": " << vec(sl.direction)
+      << ", \"width_mm\": " << sl.width_mm << ", \"length_mm\": " << sl.length_mm
+      << ", \"thickness_mm\": " << sl.thickness_mm << "}";
+  }
   o << "\n    ]\n  }";
   return o.str();
 }
@@ -131,6 +140,11 @@ std::string as_text(const analysis::CadLoadReport& r,
   for (const auto& h : c.holes)
     o << "  diameter " << h.diameter_mm << " mm  centre " << vec(h.centre) << "  axis "
       << vec(h.axis) << "  flange " << h.flange_id << "  faces " << ids(h.face_ids) << "\n";
+  o << "datum candidates: slots (" << c.slots.size() << ")\n";
+  for (const auto& sl : c.slots)
+    o << "  width " << sl.width_mm << " mm  length " << sl.length_mm << " mm  centre "
+      << vec(sl.centre) << "  across " << vec(sl.direction) << "  flange " << sl.flange_id
+      << "  faces " << ids(sl.face_ids) << "\n";
   return o.str();
 }
 
@@ -141,7 +155,7 @@ int model_main(int argc, char** argv) {
       kName, "springscan model PART.igs|PART.step|PART.brep [--json]",
       "Loads a CAD file as the station would (mm, sewn, healed) and prints its faces, "
       "flanges and bends (axis, inner radius, nominal angle, the flanges joined), and the "
-      "candidate datum features (planar pads by area, round holes).");
+      "candidate datum features (planar pads by area, round holes, slots).");
   args.add_switch("json", "print JSON instead of text");
   args.add_option("linear-deflection", "MM", "tessellation chord tolerance (default 0.05)");
   Logger log;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "analysis/cad/segmentation_internal.hpp"
@@ -55,6 +56,75 @@ std::vector<std::vector<int>> hole_wall_groups(const std::vector<CadFaceInfo>& f
   return groups;
 }
 
+// The flange a hole wall group goes through: a neighbouring skin whose normal is the axis.
+const Flange* flange_through(const std::vector<int>& group, const std::vector<CadFaceInfo>& faces,
+                             const PartSegmentation& segmentation,
+                             const std::vector<int>& flange_of_face, double parallel_deg) {
+  const Vec3& axis = faces[static_cast<std::size_t>(group.front())].direction;
+  for (int id : group)
+    for (int n : faces[static_cast<std::size_t>(id)].neighbors) {
+      const int k = flange_of_face[static_cast<std::size_t>(n)];
+      if (k < 0) continue;
+      const Flange& f = segmentation.flanges[static_cast<std::size_t>(k)];
+      if (angle_deg(f.normal, axis) <= parallel_deg) return &f;
+    }
+  return nullptr;
+}
+
+// A half-circle end of a slot: its axis point, and where its arc lies from the axis.
+struct SlotEnd {
+  const std::vector<int>* group = nullptr;
+  const Flange* flange = nullptr;
+  Vec3 axis_point = Vec3::Zero();
+  Vec3 arc_side = Vec3::Zero();  // unit, across the axis, toward the arc's material-free side
+  double radius = 0.0;
+};
+
+// Pairs the half-circle ends into slots: same flange and radius, each end's arc turned away from
+// the other; each end with its nearest partner.
+std::vector<SlotCandidate> pair_slot_ends(const std::vector<SlotEnd>& ends,
+                                          const DatumCandidateSettings& s) {
+  std::vector<SlotCandidate> slots;
+  std::vector<bool> used(ends.size(), false);
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    if (used[i]) continue;
+    const Vec3 n = ends[i].flange->normal;
+    std::size_t best = ends.size();
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (std::size_t j = 0; j < ends.size(); ++j) {
+      if (j == i || used[j] || ends[j].flange != ends[i].flange ||
+          std::abs(ends[j].radius - ends[i].radius) > s.same_radius_mm)
+        continue;
+      Vec3 d = ends[j].axis_point - ends[i].axis_point;
+      d -= d.dot(n) * n;
+      const double distance = d.norm();
+      if (!(distance > s.coaxial_mm)) continue;
+      // Each arc lies on the side away from the other end.
+      if (!(ends[i].arc_side.dot(d) < 0.0 && ends[j].arc_side.dot(d) > 0.0)) continue;
+      if (distance < best_distance) best_distance = distance, best = j;
+    }
+    if (best == ends.size()) continue;
+    used[i] = used[best] = true;
+    const SlotEnd& a = ends[i];
+    const SlotEnd& b = ends[best];
+    SlotCandidate slot;
+    slot.face_ids = *a.group;
+    slot.face_ids.insert(slot.face_ids.end(), b.group->begin(), b.group->end());
+    slot.flange_id = a.flange->id;
+    slot.axis = n;
+    const Vec3 mid = 0.5 * (a.axis_point + b.axis_point);
+    slot.centre = mid + (a.flange->point - mid).dot(n) * n;
+    Vec3 along = b.axis_point - a.axis_point;
+    along -= along.dot(n) * n;
+    slot.direction = n.cross(along.normalized());
+    slot.width_mm = a.radius + b.radius;
+    slot.length_mm = best_distance + slot.width_mm;
+    slot.thickness_mm = a.flange->thickness_mm;
+    slots.push_back(std::move(slot));
+  }
+  return slots;
+}
+
 }  // namespace
 
 DatumCandidates datum_candidates(const CadShape& shape, const std::vector<CadFaceInfo>& faces,
@@ -69,21 +139,23 @@ DatumCandidates datum_candidates(const CadShape& shape, const std::vector<CadFac
   }
   std::sort(out.pads.begin(), out.pads.end(),
             [](const PadCandidate& a, const PadCandidate& b) { return a.area_mm2 > b.area_mm2; });
-  for (const std::vector<int>& group : hole_wall_groups(faces, segmentation, settings)) {
+  const std::vector<std::vector<int>> groups = hole_wall_groups(faces, segmentation, settings);
+  std::vector<SlotEnd> slot_ends;
+  for (const std::vector<int>& group : groups) {
     const CadFaceInfo& wall = faces[static_cast<std::size_t>(group.front())];
     double sweep = 0.0;
     for (int id : group) sweep += cylinder_sweep_deg(shape, id);
-    if (sweep < settings.full_circle_deg) continue;  // a notch or a rounded corner
-    // The flange the hole goes through: a neighbouring skin whose normal is the axis.
-    const Flange* through = nullptr;
-    for (int id : group)
-      for (int n : faces[static_cast<std::size_t>(id)].neighbors) {
-        const int k = flange_of_face[static_cast<std::size_t>(n)];
-        if (k < 0 || through) continue;
-        const Flange& f = segmentation.flanges[static_cast<std::size_t>(k)];
-        if (angle_deg(f.normal, wall.direction) <= settings.parallel_deg) through = &f;
-      }
+    const Flange* through =
+        flange_through(group, faces, segmentation, flange_of_face, settings.parallel_deg);
     if (!through) continue;
+    if (std::abs(sweep - 180.0) <= settings.half_circle_tolerance_deg) {
+      Vec3 side = wall.inner_point - wall.axis_point;
+      side -= side.dot(through->normal) * through->normal;
+      if (side.norm() > 0.0)
+        slot_ends.push_back({&group, through, wall.axis_point, side.normalized(), wall.radius_mm});
+      continue;
+    }
+    if (sweep < settings.full_circle_deg) continue;  // a notch or a rounded corner
     HoleCandidate hole;
     hole.face_ids = group;
     hole.flange_id = through->id;
@@ -95,6 +167,10 @@ DatumCandidates datum_candidates(const CadShape& shape, const std::vector<CadFac
   }
   std::sort(out.holes.begin(), out.holes.end(), [](const HoleCandidate& a, const HoleCandidate& b) {
     return a.diameter_mm > b.diameter_mm;
+  });
+  out.slots = pair_slot_ends(slot_ends, settings);
+  std::sort(out.slots.begin(), out.slots.end(), [](const SlotCandidate& a, const SlotCandidate& b) {
+    return a.length_mm > b.length_mm;
   });
   return out;
 }
