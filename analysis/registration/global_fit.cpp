@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -105,6 +106,66 @@ Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model
              nearest_facing_pairs(model_tree, model_normals, scan_normals,
                                   settings.icp.max_correspondence_distance_mm),
              start, settings.icp);
+}
+
+namespace {
+
+// Pairs on the exact surface: the foot and normal of the closest point, within the ICP's
+// correspondence distance; with normals (a one-sided scan of a solid) only a foot whose normal
+// faces the point's way (the facing rule, registration/facing.hpp).
+IcpPairSearch exact_surface_pairs(const SurfaceDistance& exact, const std::vector<Vec3>& normals,
+                                  double max_distance_mm) {
+  const double limit2 = max_distance_mm > 0.0 ? max_distance_mm * max_distance_mm
+                                              : std::numeric_limits<double>::infinity();
+  return
+      [&exact, &normals, limit2](const std::vector<Vec3>& source, const Transform& T,
+                                 std::size_t begin, std::size_t end, std::vector<IcpPair>& pairs) {
+        for (std::size_t i = begin; i < end; ++i) {
+          const Vec3 q = T * source[i];
+          const SurfaceHit hit = exact.closest(q);
+          IcpPair& p = pairs[i];
+          p.point = hit.foot;
+          p.normal = hit.normal;
+          p.squared_distance_mm2 = (q - hit.foot).squaredNorm();
+          const Vec3 n = normals.empty() ? Vec3::Zero() : Vec3(T.linear() * normals[i]);
+          p.valid = std::isfinite(hit.signed_distance_mm) && p.squared_distance_mm2 <= limit2 &&
+                    (n.isZero() || hit.normal.dot(n) > 0.0);
+        }
+      };
+}
+
+}  // namespace
+
+Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
+                                      const std::vector<Vec3>& scan_normals,
+                                      const SurfaceDistance& exact, const Transform& start,
+                                      const GlobalFitSettings& settings) {
+  const FacingSample sample = facing_sample(scan, scan_normals, settings.exact_points);
+  IcpSettings on_surface = settings.icp;
+  on_surface.max_iterations = settings.exact_iterations;
+  auto fit =
+      icp(sample.points,
+          exact_surface_pairs(exact, sample.normals, settings.icp.max_correspondence_distance_mm),
+          start, on_surface);
+  if (!fit) return fit.error().prepend("global fit: on the exact surface: ");
+  return fit;
+}
+
+std::optional<Error> finish_on_exact_surface(const std::vector<Vec3>& scan,
+                                             const std::vector<Vec3>& scan_normals,
+                                             const SurfaceDistance* exact,
+                                             const GlobalFitSettings& settings, IcpResult& fit) {
+  if (!exact || settings.exact_iterations <= 0) return std::nullopt;
+  auto more = exact_surface_icp(scan, scan_normals, *exact, fit.T_target_source, settings);
+  if (!more) return more.error();
+  fit.T_target_source = more->T_target_source;
+  fit.iterations += more->iterations;
+  fit.error_history.insert(fit.error_history.end(), more->error_history.begin(),
+                           more->error_history.end());
+  fit.inliers = more->inliers;
+  fit.converged = more->converged;
+  fit.stop_reason = more->stop_reason + " (on the exact surface)";
+  return std::nullopt;
 }
 
 Expected<GlobalFitResult> global_fit(const std::vector<Vec3>& scan, const KdTree& model_tree,

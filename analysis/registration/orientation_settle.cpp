@@ -167,6 +167,11 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
         errors[k] = icp_fit.message();
         return;
       }
+      if (auto e = finish_on_exact_surface(in.scan, in.scan_normals, in.exact_updates, serial,
+                                           *icp_fit)) {
+        errors[k] = e->message;
+        return;
+      }
       auto pin = pin_to_boundary(in.scan, icp_fit->T_target_source, in.model, in.model_tree,
                                  settings.boundary);
       if (!pin) {

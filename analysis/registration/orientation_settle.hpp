@@ -6,7 +6,8 @@
 // openamr side panel, zero springback: its right orientation 0.035 mm^2 at 4-12 mm off along its
 // length, the half turn 0.032). So every distinct orientation that scored within settle_ratio of
 // the best (and that the model does not map onto the best's by a symmetry of its own) is taken
-// as far as the best: the final ICP and the boundary's pinning (registration/boundary.hpp). Then
+// as far as the best: the final ICP, its updates on the exact surface and the boundary's pinning
+// (registration/boundary.hpp). Then
 // all of them are scored on the same fit points by the same error against the exact CAD surface
 // (exact_surface_score), and the lowest wins. Two that stay within noise of each other
 // (symmetry_warning_ratio) make the part ambiguous.
@@ -24,11 +25,15 @@
 namespace springscan::analysis {
 
 struct OrientationSettleInput {
-  const std::vector<Vec3>& fit_points;   ///< the global fit's scan points, scan frame
-  const std::vector<Vec3>& fit_normals;  ///< one per fit point (facing rule), or empty
-  const std::vector<Vec3>& scan;         ///< the whole scan, scan frame (the boundary's ends)
-  const PartModel& model;                ///< with its exact distance; without, nothing is settled
-  const KdTree& model_tree;              ///< over model.samples.points
+  const std::vector<Vec3>& fit_points;    ///< the global fit's scan points, scan frame
+  const std::vector<Vec3>& fit_normals;   ///< one per fit point (facing rule), or empty
+  const std::vector<Vec3>& scan;          ///< the whole scan, scan frame (the boundary's ends)
+  const std::vector<Vec3>& scan_normals;  ///< one per scan point, or empty
+  const PartModel& model;                 ///< with its exact distance; without, nothing is settled
+  const KdTree& model_tree;               ///< over model.samples.points
+  /// The exact distance when the global fit ended with its updates on the exact surface
+  /// (finish_on_exact_surface), so that the rivals end alike; null: they did not.
+  const SurfaceDistance* exact_updates = nullptr;
 };
 
 /// Settles `fit`'s orientation (see above). `pinned`: the boundary's result for fit.T_cad_scan.

@@ -58,15 +58,13 @@ TEST_P(SlotCandidates, EachIsAStadiumCutThroughItsFlange) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(RealParts, SlotCandidates,
-                         ::testing::Values("nema-17-bracket.step",
-                                           "openamr-MMP.00.00.00.001_Front_panel.step",
-                                           "openamr-MMP.00.00.00.003_Side_panel.step"),
-                         [](const ::testing::TestParamInfo<std::string>& p) {
-                           return std::string(p.index == 0   ? "NemaBracket"
-                                              : p.index == 1 ? "FrontPanel"
-                                                             : "SidePanel");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    RealParts, SlotCandidates,
+    ::testing::Values("nema-17-bracket.step", "openamr-MMP.00.00.00.001_Front_panel.step",
+                      "openamr-MMP.00.00.00.003_Side_panel.step"),
+    [](const ::testing::TestParamInfo<std::string>& p) {
+      return std::string(p.index == 0 ? "NemaBracket" : p.index == 1 ? "FrontPanel" : "SidePanel");
+    });
 
 // Parts without slots list none (their half-circle faces are notches or corner reliefs).
 TEST(SlotCandidates, NoneOnPartsWithoutSlots) {
