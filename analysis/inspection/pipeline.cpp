@@ -340,9 +340,12 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                         config->global_fit, *fit_normals);
   if (!fit) return fit.error();
   // Its last updates on the exact CAD surface, on the scan's own points, where the samples'
-  // tangent planes are biased (a bend radius below their spacing).
+  // tangent planes are biased (a bend radius below their spacing). On a solid only with the
+  // scanner's normals: without the facing rule a point near a closed hem (four skins within
+  // 1.8 mm) may pair across the sheet (the cover flange's points-only field went 0.3 -> 1.2 mm).
+  const bool facing_known = fit_normals->empty() || !normals_of(scan).empty();
   const SurfaceDistance* exact_updates =
-      samples_biased_at_bends(model, model_tree) ? model.distance.get() : nullptr;
+      facing_known && samples_biased_at_bends(model, model_tree) ? model.distance.get() : nullptr;
   if (auto error = finish_on_exact_surface(scan.points, normals_of(scan), exact_updates,
                                            config->global_fit, fit->icp))
     return *error;
