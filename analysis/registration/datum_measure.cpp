@@ -162,22 +162,13 @@ int sectors_seen(const std::vector<Eigen::Vector2d>& p, const std::vector<bool>&
   return static_cast<int>(std::count(seen.begin(), seen.end(), true));
 }
 
-// Wall points: between the two skins (clear of their rims), within `band` of the radius.
-FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band,
-                        const DatumAlignmentSettings& s) {
-  Vec3 e1, e2;
-  complete_basis(d.normal, e1, e2);
-  const double r0 = 0.5 * d.diameter_mm;
-  std::vector<Eigen::Vector2d> pts;
-  for (std::size_t i = 0; i < near.points.size(); ++i) {
-    const Vec3 v = near.points[i] - d.point;
-    const double h = v.dot(d.normal);
-    const Eigen::Vector2d uv(v.dot(e1), v.dot(e2));
-    if (h > -kSkinMarginMm || h < -d.thickness_mm + kSkinMarginMm) continue;
-    if (std::abs(uv.norm() - r0) > band || !on_wall(near, i, d.normal)) continue;
-    pts.push_back(uv);
-  }
-  if (pts.size() < s.min_points) return too_few(pts.size(), "on the hole's wall", s.min_points);
+// The hole from the in-plane points of its `seen` part ("wall" or "rim"): the robust circle
+// (geometric least squares from the algebraic one, outliers beyond outlier_sigmas left out),
+// seen over at least min_hole_sectors of 12; its centre in the plane of e1, e2 about d.point.
+FeatureFit hole_from_circle_points(const Datum& d, const std::vector<Eigen::Vector2d>& pts,
+                                   const Vec3& e1, const Vec3& e2, const std::string& seen,
+                                   const DatumAlignmentSettings& s) {
+  if (pts.size() < s.min_points) return too_few(pts.size(), "on the hole's " + seen, s.min_points);
   std::vector<bool> keep(pts.size(), true);
   Circle c;
   std::vector<double> res(pts.size());
@@ -193,14 +184,32 @@ FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band,
   if (f.points < s.min_points) return too_few(f.points, "on the hole's circle", s.min_points);
   const int sectors = sectors_seen(pts, keep, c);
   if (sectors < s.min_hole_sectors) {
-    f.failure = "its wall is seen over " + std::to_string(30 * sectors) + " deg only (needs " +
-                std::to_string(30 * s.min_hole_sectors) + ")";
+    f.failure = "its " + seen + " is seen over " + std::to_string(30 * sectors) +
+                " deg only (needs " + std::to_string(30 * s.min_hole_sectors) + ")";
     return f;
   }
   f.measured = true;
   f.point = d.point + c.centre.x() * e1 + c.centre.y() * e2;
   f.diameter_mm = 2.0 * c.radius;
   return f;
+}
+
+// Wall points: between the two skins (clear of their rims), within `band` of the radius.
+FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band,
+                        const DatumAlignmentSettings& s) {
+  Vec3 e1, e2;
+  complete_basis(d.normal, e1, e2);
+  const double r0 = 0.5 * d.diameter_mm;
+  std::vector<Eigen::Vector2d> pts;
+  for (std::size_t i = 0; i < near.points.size(); ++i) {
+    const Vec3 v = near.points[i] - d.point;
+    const double h = v.dot(d.normal);
+    const Eigen::Vector2d uv(v.dot(e1), v.dot(e2));
+    if (h > -kSkinMarginMm || h < -d.thickness_mm + kSkinMarginMm) continue;
+    if (std::abs(uv.norm() - r0) > band || !on_wall(near, i, d.normal)) continue;
+    pts.push_back(uv);
+  }
+  return hole_from_circle_points(d, pts, e1, e2, "wall", s);
 }
 
 // A surface model's hole has no wall: its rim is where the skin's points stop. Per 5 deg
@@ -234,30 +243,7 @@ FeatureFit measure_hole_rim(const Datum& d, const FeaturePoints& near, double ba
   for (int k = 0; k < kRimSectors; ++k)
     if (std::isfinite(inner[static_cast<std::size_t>(k)]))
       pts.push_back(rim[static_cast<std::size_t>(k)]);
-  if (pts.size() < s.min_points) return too_few(pts.size(), "on the hole's rim", s.min_points);
-  std::vector<bool> keep(pts.size(), true);
-  Circle c;
-  std::vector<double> res(pts.size());
-  for (int round = 0; round < kRobustRounds; ++round) {
-    c = geometric(pts, keep, round == 0 ? kasa(pts, keep) : c);
-    for (std::size_t i = 0; i < pts.size(); ++i) res[i] = (pts[i] - c.centre).norm() - c.radius;
-    const auto next = inliers_of(res, s.outlier_sigmas);
-    if (next == keep) break;
-    keep = next;
-  }
-  FeatureFit f;
-  f.rms_mm = rms_of(res, keep, f.points);
-  if (f.points < s.min_points) return too_few(f.points, "on the hole's rim", s.min_points);
-  const int sectors = sectors_seen(pts, keep, c);
-  if (sectors < s.min_hole_sectors) {
-    f.failure = "its rim is seen over " + std::to_string(30 * sectors) + " deg only (needs " +
-                std::to_string(30 * s.min_hole_sectors) + ")";
-    return f;
-  }
-  f.measured = true;
-  f.point = d.point + c.centre.x() * e1 + c.centre.y() * e2;
-  f.diameter_mm = 2.0 * c.radius;
-  return f;
+  return hole_from_circle_points(d, pts, e1, e2, "rim", s);
 }
 
 // ---- slot: the mid-plane of its two straight walls -------------------------------------------
