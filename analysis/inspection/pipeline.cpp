@@ -349,7 +349,12 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   if (auto error = finish_on_exact_surface(scan.points, normals_of(scan), exact_updates,
                                            config->global_fit, fit->icp))
     return *error;
-  fit->T_cad_scan = fit->icp.T_target_source;
+  if (exact_updates) {  // the fit's figures follow its pose
+    fit->T_cad_scan = fit->icp.T_target_source;
+    fit->rms_final_mm =
+        rms_nearest_distance(reduced->scan_for_fit.points, fit->T_cad_scan, model_tree,
+                             config->global_fit.icp.trimmed_fraction, config->threads);
+  }
   // The part's ends fix what the surface leaves free (registration/boundary.hpp).
   auto pinned =
       pin_to_boundary(scan.points, fit->T_cad_scan, model, model_tree, config->global_fit.boundary);

@@ -134,8 +134,6 @@ IcpPairSearch exact_surface_pairs(const SurfaceDistance& exact, const std::vecto
       };
 }
 
-}  // namespace
-
 Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
                                       const std::vector<Vec3>& scan_normals,
                                       const SurfaceDistance& exact, const Transform& start,
@@ -150,6 +148,8 @@ Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
   if (!fit) return fit.error().prepend("global fit: on the exact surface: ");
   return fit;
 }
+
+}  // namespace
 
 std::optional<Error> finish_on_exact_surface(const std::vector<Vec3>& scan,
                                              const std::vector<Vec3>& scan_normals,

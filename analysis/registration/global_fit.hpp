@@ -69,22 +69,15 @@ Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model
                               const GlobalFitSettings& settings,
                               const std::vector<Vec3>& scan_normals = {});
 
-/// At most settings.exact_iterations ICP updates from `start` whose pairs are the exact CAD
-/// surface's closest points and normals (`exact`), on an evenly strided sample of
-/// settings.exact_points of the scan's own points (with their normals, if any, the facing rule).
-/// A sample's tangent plane lies off the surface by about d^2 / 2R at a distance d from a radius
-/// R, always toward the convex side: at a closed hem's 0.05 mm fold that biased the cover
-/// flange's fit by 0.16 deg and 0.16 mm (docs/alignment.md). The scan's own points, not the
-/// fit's voxel centroids: on a solid scanned all round a voxel holds both skins, and its
-/// centroid lies mid-sheet. Errors: ICP's.
-Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
-                                      const std::vector<Vec3>& scan_normals,
-                                      const SurfaceDistance& exact, const Transform& start,
-                                      const GlobalFitSettings& settings);
-
-/// `fit` continued by exact_surface_icp from its pose, when `exact` is given and
-/// settings.exact_iterations > 0: its pose, inliers and stop, the iterations and error history
-/// of both. Errors: ICP's.
+/// `fit` continued from its pose by at most settings.exact_iterations ICP updates whose pairs
+/// are the exact CAD surface's closest points and normals (`exact`; nothing when it is null or
+/// exact_iterations is 0), on an evenly strided sample of settings.exact_points of the scan's
+/// own points (with their normals, if any, the facing rule). A sample's tangent plane lies off
+/// the surface by about d^2 / 2R at a distance d from a radius R, always toward the convex side:
+/// at a closed hem's 0.05 mm fold that biased the cover flange's fit by 0.16 deg and 0.16 mm
+/// (docs/alignment.md). The scan's own points, not the fit's voxel centroids: on a solid scanned
+/// all round a voxel holds both skins, and its centroid lies mid-sheet. `fit` then has the new
+/// pose, inliers and stop, and the iterations and error history of both. Errors: ICP's.
 std::optional<Error> finish_on_exact_surface(const std::vector<Vec3>& scan,
                                              const std::vector<Vec3>& scan_normals,
                                              const SurfaceDistance* exact,

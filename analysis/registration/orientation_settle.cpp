@@ -50,7 +50,7 @@ struct Settled {
   BoundaryResult boundary;
   double whole_mm2 = 0.0;           // exact score of the fit points
   std::size_t feature_points = 0;   // scan points judged in the symmetry features
-  std::size_t feature_misfits = 0;  // ... that lie off the surface by feature_misfit_mm or more
+  std::size_t feature_misfits = 0;  // ... that lie off the surface beyond the noise
 };
 
 // The scan points that land in a symmetry feature under T (CAD frame), at most `count` of them
@@ -81,8 +81,9 @@ double robust_sigma(const std::vector<Vec3>& points, const Transform& T,
   return 1.4826 * *mid;
 }
 
-void judge(const OrientationSettleInput& in, const OrientationSettings& s, Settled& out) {
-  const FacingSample sample = facing_sample(in.fit_points, in.fit_normals, s.score_points);
+// `sample`: the fit points every orientation is scored on (the same for all).
+void judge(const OrientationSettleInput& in, const FacingSample& sample,
+           const OrientationSettings& s, Settled& out) {
   const SurfaceDistance& exact = *in.model.distance;
   const Transform& T = out.boundary.T_cad_scan;
   out.whole_mm2 = exact_surface_score(sample.points, sample.normals, T, exact, s.score_cap_mm);
@@ -155,6 +156,8 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
   std::vector<Settled> all(rivals.size() + 1);
   all[0] = {choice.best, fit.icp, std::move(pinned)};
   std::vector<std::string> errors(all.size());
+  const FacingSample sample =
+      facing_sample(in.fit_points, in.fit_normals, settings.orientation.score_points);
   parallel_tasks(all.size(), settings.icp.threads, [&](std::size_t k) {
     Settled& r = all[k];
     if (k > 0) {
@@ -181,7 +184,7 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
       r.icp = std::move(*icp_fit);
       r.boundary = std::move(*pin);
     }
-    judge(in, settings.orientation, r);
+    judge(in, sample, settings.orientation, r);
   });
   for (const std::string& e : errors)
     if (!e.empty()) return fail("global fit: settling the orientation: " + e);
