@@ -50,7 +50,8 @@ class NearestWithin {
   bool found_ = false;
 };
 
-// NearestWithin, counting only points whose normal has a positive dot product with a direction.
+// NearestWithin, counting only points whose normal has a dot product with a direction above a
+// floor (0: a positive one).
 // With a rank limit it also keeps the `rank` smallest distances of the other points it is offered
 // below the best so far: the search offers every point closer than the final best, so the best
 // is among the rank nearest unless all rank of those lie below it. One pass, pruned by the best.
@@ -58,14 +59,15 @@ class NearestAlong {
  public:
   static constexpr std::size_t kMaxRank = 32;
   NearestAlong(double max_squared_distance, const std::vector<Vec3>& normals, const Vec3& direction,
-               std::size_t rank)
+               std::size_t rank, double min_dot)
       : best_(max_squared_distance),
         normals_(normals),
         direction_(direction),
+        min_dot_(min_dot),
         rank_(std::min(rank, kMaxRank)) {}
   bool addPoint(double squared_distance, std::uint32_t index) {
     if (!(squared_distance < best_)) return true;
-    if (normals_[index].dot(direction_) > 0.0) {
+    if (normals_[index].dot(direction_) > min_dot_) {
       best_ = squared_distance;
       index_ = index;
       found_ = true;
@@ -92,6 +94,7 @@ class NearestAlong {
   double best_;
   const std::vector<Vec3>& normals_;
   const Vec3& direction_;
+  double min_dot_;
   std::size_t rank_, closer_ = 0;
   std::array<double, kMaxRank> other_{};
   std::uint32_t index_ = 0;
@@ -200,12 +203,12 @@ void KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out
 
 std::optional<Neighbor> KdTree::nearest_along(const Vec3& query, const std::vector<Vec3>& normals,
                                               const Vec3& direction, double max_distance,
-                                              std::size_t max_rank) const {
+                                              std::size_t max_rank, double min_dot) const {
   if (empty() || !(max_distance > 0.0) || normals.size() != size()) return std::nullopt;
   const double bound = max_distance == std::numeric_limits<double>::infinity()
                            ? std::numeric_limits<double>::infinity()
                            : max_distance * max_distance;
-  NearestAlong result(bound, normals, direction, max_rank);
+  NearestAlong result(bound, normals, direction, max_rank, min_dot);
   impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (!result.found()) return std::nullopt;
   return result.neighbor();

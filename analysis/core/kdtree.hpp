@@ -58,11 +58,13 @@ class KdTree {
   /// has a positive dot product with `direction`, or nothing; with `max_rank` > 0, only when it
   /// is among the query's max_rank nearest points of any normal. The normal test runs inside the
   /// search, so the search prunes by the nearest such point (a one-sided scan of a solid and the
-  /// skin it sees: registration/facing.hpp), in one pass. max_rank is at most 32.
+  /// skin it sees: registration/facing.hpp), in one pass. max_rank is at most 32. With
+  /// `min_dot` the dot product must exceed that instead of 0 (unit vectors: the cosine of the
+  /// largest angle between the normal and `direction`).
   std::optional<Neighbor> nearest_along(
       const Vec3& query, const std::vector<Vec3>& normals, const Vec3& direction,
-      double max_distance = std::numeric_limits<double>::infinity(),
-      std::size_t max_rank = 0) const;
+      double max_distance = std::numeric_limits<double>::infinity(), std::size_t max_rank = 0,
+      double min_dot = 0.0) const;
 
   /// The k nearest points whose normal agrees with `direction` as in nearest_along, closest
   /// first, into `indices` and `squared_distances` (room for k each); returns how many.

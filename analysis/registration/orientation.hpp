@@ -53,6 +53,17 @@ struct OrientationSettings {
   std::size_t min_feature_misfits = 10;  ///< the features decide when the orientations' misfit
                                          ///< counts differ by at least this and the lower is at
                                          ///< most half the higher (a hole the other one fills)
+  /// Decisive points (registration/orientation_settle.hpp): scan points (evenly strided) whose
+  /// exact distance under every settled orientation is compared.
+  std::size_t decisive_points = 100000;
+  double decisive_margin_mm = 0.15;      ///< a point one orientation leaves this much farther off
+  double decisive_sigmas = 6.0;          ///< the surface than the other (or this many robust
+                                         ///< sigmas of all points' differences, when more) ...
+  double decisive_far_ratio = 3.0;       ///< ... and at least this many times as far, tells
+                                         ///< against it
+  std::size_t min_decisive_points = 10;  ///< an orientation wins when this many points tell
+  double decisive_ratio = 0.25;          ///< against each other one and at most this share of
+                                         ///< that many tell against it
   double distinct_pose_deg = 5.0;        ///< orientations farther apart than this are distinct
   double equivalent_rms_mm = 0.02;       ///< the model moved by the motion between two finalists
                                          ///< (centroid kept, refined onto itself) fits itself
@@ -75,7 +86,8 @@ struct OrientationChoice {
   bool ambiguous = false;  ///< ambiguity > ambiguous_error_ratio
   bool symmetric_model = false;  ///< a distinct orientation fits as well and the model maps onto
                                  ///< itself by the motion between them (equivalent)
-  std::string decided_by = "surface";  ///< "surface", "converged surface" or "symmetry features"
+  std::string decided_by = "surface";  ///< "surface", "converged surface", "decisive points" or
+                                       ///< "symmetry features"
                                        ///< (orientation_settle.hpp)
 };
 

@@ -51,7 +51,84 @@ struct Settled {
   double whole_mm2 = 0.0;           // exact score of the fit points
   std::size_t feature_points = 0;   // scan points judged in the symmetry features
   std::size_t feature_misfits = 0;  // ... that lie off the surface beyond the noise
+  std::vector<double> decisive_mm;  // |exact distance| of each decisive point (NaN: none)
 };
+
+// |exact distance| of every point under T. A strided scan still comes nearly line by line: the
+// previous point's foot bounds the next point's distance (SurfaceDistance::closest_within).
+std::vector<double> exact_distances(const std::vector<Vec3>& points, const Transform& T,
+                                    const SurfaceDistance& exact) {
+  std::vector<double> d(points.size());
+  Vec3 previous_foot = Vec3::Zero();
+  bool have_foot = false;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3 q = T * points[i];
+    const SurfaceHit hit =
+        have_foot ? exact.closest_within(q, (q - previous_foot).norm()) : exact.closest(q);
+    d[i] = std::abs(hit.signed_distance_mm);
+    have_foot = std::isfinite(hit.signed_distance_mm);
+    previous_foot = hit.foot;
+  }
+  return d;
+}
+
+// The decisive points' verdict. Two orientations of a near-symmetric part put its surface in
+// nearly the same place: a scan point lies about as far off the one as off the other, its noise
+// and its flange's springback alike, and only where the part is not symmetric (a notch, a hole,
+// a tab the other orientation lacks) does one of them leave it much farther off. Such a point
+// tells against that orientation: farther by decisive_margin_mm (or decisive_sigmas robust
+// sigmas of all points' differences, how far apart the two fits lie) and decisive_far_ratio
+// times as far. The ratio keeps out the points both leave off the surface: a springback-turned
+// flange that the two fits spread differently (the side panel's bend lines, 0.23 against
+// 0.13 mm, told against its right orientation before it).
+struct DecisiveCounts {
+  std::vector<std::vector<std::size_t>> against;  // [a][b]: points a fits and b leaves off
+  double margin_mm = 0.0;                         // the largest margin of a pair
+};
+
+// 1.4826 x the median of |values| (non-finite ones left out); 0 for none.
+double robust_sigma(std::vector<double> d) {
+  std::erase_if(d, [](double v) { return !std::isfinite(v); });
+  for (double& v : d) v = std::abs(v);
+  if (d.empty()) return 0.0;
+  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+  std::nth_element(d.begin(), mid, d.end());
+  return 1.4826 * *mid;
+}
+
+DecisiveCounts count_decisive(const std::vector<Settled>& all, const OrientationSettings& s) {
+  const std::size_t n = all.size();
+  DecisiveCounts out{std::vector<std::vector<std::size_t>>(n, std::vector<std::size_t>(n, 0)), 0.0};
+  for (std::size_t a = 0; a < n; ++a)
+    for (std::size_t b = a + 1; b < n; ++b) {
+      const std::vector<double>&da = all[a].decisive_mm, &db = all[b].decisive_mm;
+      std::vector<double> diff(da.size());
+      for (std::size_t i = 0; i < da.size(); ++i) diff[i] = db[i] - da[i];
+      const double margin = std::max(s.decisive_margin_mm, s.decisive_sigmas * robust_sigma(diff));
+      out.margin_mm = std::max(out.margin_mm, margin);
+      for (std::size_t i = 0; i < da.size(); ++i) {
+        out.against[a][b] += diff[i] > margin && db[i] > s.decisive_far_ratio * da[i];
+        out.against[b][a] += -diff[i] > margin && da[i] > s.decisive_far_ratio * db[i];
+      }
+    }
+  return out;
+}
+
+// The orientation that enough points favour over every other while few favour the other.
+std::optional<std::size_t> decisive_winner(const DecisiveCounts& c, const OrientationSettings& s) {
+  const std::size_t n = c.against.size();
+  for (std::size_t w = 0; w < n; ++w) {
+    bool wins = true;
+    for (std::size_t k = 0; k < n && wins; ++k) {
+      if (k == w) continue;
+      const std::size_t for_w = c.against[w][k], for_k = c.against[k][w];
+      wins = for_w >= s.min_decisive_points &&
+             static_cast<double>(for_k) <= s.decisive_ratio * static_cast<double>(for_w);
+    }
+    if (wins) return w;
+  }
+  return std::nullopt;
+}
 
 // The scan points that land in a symmetry feature under T (CAD frame), at most `count` of them
 // evenly strided.
@@ -69,24 +146,22 @@ std::vector<Vec3> in_features(const std::vector<Vec3>& scan, const Transform& T,
   return strided_sample(inside, count);
 }
 
-// The scan's noise as a fit sees it: a robust sigma (1.4826 x the median) of the exact distances.
+// The scan's noise as a fit sees it: a robust sigma of the exact distances.
 double robust_sigma(const std::vector<Vec3>& points, const Transform& T,
                     const SurfaceDistance& exact) {
   std::vector<double> d(points.size());
   for (std::size_t i = 0; i < points.size(); ++i)
     d[i] = std::abs(exact.closest(T * points[i]).signed_distance_mm);
-  if (d.empty()) return 0.0;
-  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-  std::nth_element(d.begin(), mid, d.end());
-  return 1.4826 * *mid;
+  return robust_sigma(std::move(d));
 }
 
-// `sample`: the fit points every orientation is scored on (the same for all).
+// `decisive`: the scan points every orientation's distances are compared on.
 void judge(const OrientationSettleInput& in, const FacingSample& sample,
-           const OrientationSettings& s, Settled& out) {
+           const std::vector<Vec3>& decisive, const OrientationSettings& s, Settled& out) {
   const SurfaceDistance& exact = *in.model.distance;
   const Transform& T = out.boundary.T_cad_scan;
   out.whole_mm2 = exact_surface_score(sample.points, sample.normals, T, exact, s.score_cap_mm);
+  out.decisive_mm = exact_distances(decisive, T, exact);
   if (s.symmetry_features.empty()) return;
   // A misfit stands out of this fit's own noise, whatever the scanner's.
   const double misfit_mm = std::max(
@@ -127,6 +202,60 @@ double rank(const std::vector<Settled>& all, double Settled::*score, std::size_t
   return next > 0.0 ? all[winner].*score / next : 1.0;
 }
 
+// The settled orientations judged, in order: the symmetry features when they tell them apart;
+// else the decisive points of the whole scan; else the converged surface scores, which within
+// noise of each other cannot overturn the global fit's choice (the part is ambiguous then,
+// whichever is kept: with springback both errors are mostly the flanges' turn, and their order
+// a matter of where each fit spread it). Sets choice.ambiguity and decided_by; returns the
+// winner's index in `all`.
+std::size_t decide(const std::vector<Settled>& all, const GlobalFitSettings& settings,
+                   OrientationChoice& choice, std::vector<std::string>& warnings) {
+  const OrientationSettings& os = settings.orientation;
+  if (!os.symmetry_features.empty()) {
+    if (const auto by_features = feature_winner(all, os)) {
+      std::size_t fewest_other = std::numeric_limits<std::size_t>::max();
+      for (std::size_t k = 0; k < all.size(); ++k)
+        if (k != *by_features) fewest_other = std::min(fewest_other, all[k].feature_misfits);
+      choice.ambiguity = static_cast<double>(all[*by_features].feature_misfits + 1) /
+                         static_cast<double>(fewest_other + 1);
+      choice.decided_by = "symmetry features";
+      return *by_features;
+    }
+    std::ostringstream text;
+    text << "global fit: the symmetry features do not tell the orientations apart in this scan "
+            "(points off the surface beyond the noise:";
+    for (const Settled& r : all) text << " " << r.feature_misfits << " of " << r.feature_points;
+    text << "): the whole part decides";
+    warnings.push_back(text.str());
+  }
+  const DecisiveCounts counts = count_decisive(all, os);
+  if (const auto by_points = decisive_winner(counts, os)) {
+    double worst = 0.0;
+    for (std::size_t k = 0; k < all.size(); ++k)
+      if (k != *by_points)
+        worst = std::max(worst, static_cast<double>(counts.against[k][*by_points] + 1) /
+                                    static_cast<double>(counts.against[*by_points][k] + 1));
+    choice.ambiguity = worst;
+    choice.decided_by = "decisive points";
+    return *by_points;
+  }
+  std::size_t winner = 0;
+  choice.ambiguity = rank(all, &Settled::whole_mm2, winner);
+  if (choice.ambiguity > settings.symmetry_warning_ratio) winner = 0;
+  choice.decided_by = "converged surface";
+  if (choice.ambiguity > settings.symmetry_warning_ratio) {
+    std::ostringstream text;
+    text << "global fit: no scan point tells the orientations apart (points more than "
+         << counts.margin_mm << " mm farther off the surface under one than under another:";
+    for (std::size_t a = 0; a < all.size(); ++a)
+      for (std::size_t b = 0; b < all.size(); ++b)
+        if (a != b) text << " " << counts.against[a][b];
+    text << "): the part's distinguishing features are not in the scan";
+    warnings.push_back(text.str());
+  }
+  return winner;
+}
+
 void restate_ambiguity(GlobalFitResult& fit) {
   auto& w = fit.warnings;
   w.erase(
@@ -154,10 +283,13 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
   if (rivals.empty()) return pinned;
   // all[0]: the best as the pipeline has it; then each rival taken as far, in parallel.
   std::vector<Settled> all(rivals.size() + 1);
-  all[0] = {choice.best, fit.icp, std::move(pinned)};
+  all[0].candidate = choice.best;
+  all[0].icp = fit.icp;
+  all[0].boundary = std::move(pinned);
   std::vector<std::string> errors(all.size());
   const FacingSample sample =
       facing_sample(in.fit_points, in.fit_normals, settings.orientation.score_points);
+  const std::vector<Vec3> decisive = strided_sample(in.scan, settings.orientation.decisive_points);
   parallel_tasks(all.size(), settings.icp.threads, [&](std::size_t k) {
     Settled& r = all[k];
     if (k > 0) {
@@ -184,38 +316,11 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
       r.icp = std::move(*icp_fit);
       r.boundary = std::move(*pin);
     }
-    judge(in, sample, settings.orientation, r);
+    judge(in, sample, decisive, settings.orientation, r);
   });
   for (const std::string& e : errors)
     if (!e.empty()) return fail("global fit: settling the orientation: " + e);
-  // The features judge when they tell the orientations apart; else the whole part.
-  const OrientationSettings& os = settings.orientation;
-  std::size_t winner = 0;
-  const auto by_features = os.symmetry_features.empty() ? std::nullopt : feature_winner(all, os);
-  if (by_features) {
-    winner = *by_features;
-    std::size_t fewest_other = std::numeric_limits<std::size_t>::max();
-    for (std::size_t k = 0; k < all.size(); ++k)
-      if (k != winner) fewest_other = std::min(fewest_other, all[k].feature_misfits);
-    choice.ambiguity = static_cast<double>(all[winner].feature_misfits + 1) /
-                       static_cast<double>(fewest_other + 1);
-    choice.decided_by = "symmetry features";
-  } else {
-    choice.ambiguity = rank(all, &Settled::whole_mm2, winner);
-    // Within noise of each other the fits cannot overturn the global fit's choice (the part is
-    // ambiguous then, whichever is kept): with springback both errors are mostly the flanges'
-    // turn, and their order a matter of where each fit spread it.
-    if (choice.ambiguity > settings.symmetry_warning_ratio) winner = 0;
-    choice.decided_by = "converged surface";
-    if (!os.symmetry_features.empty()) {
-      std::ostringstream text;
-      text << "global fit: the symmetry features do not tell the orientations apart in this scan "
-              "(points off the surface beyond the noise:";
-      for (const Settled& r : all) text << " " << r.feature_misfits << " of " << r.feature_points;
-      text << "): the whole part decides";
-      fit.warnings.push_back(text.str());
-    }
-  }
+  const std::size_t winner = decide(all, settings, choice, fit.warnings);
   for (const Settled& r : all) choice.candidates[r.candidate].score_mm2 = r.whole_mm2;
   const Settled& w = all[winner];
   if (winner > 0) {

@@ -7,10 +7,12 @@
 // length, the half turn 0.032). So every distinct orientation that scored within settle_ratio of
 // the best (and that the model does not map onto the best's by a symmetry of its own) is taken
 // as far as the best: the final ICP, its updates on the exact surface and the boundary's pinning
-// (registration/boundary.hpp). Then
-// all of them are scored on the same fit points by the same error against the exact CAD surface
-// (exact_surface_score), and the lowest wins. Two that stay within noise of each other
-// (symmetry_warning_ratio) make the part ambiguous.
+// (registration/boundary.hpp). Then they are judged, in order: by the part catalogue's symmetry
+// features, when those tell them apart; else by the decisive points, the scan points that one
+// orientation leaves far off the surface and another fits (a notch or hole only one of them
+// has; orientation_settle.cpp); else by the same error against the exact CAD surface on the
+// same fit points (exact_surface_score), the lowest winning. Two that stay within noise of each other
+// (symmetry_warning_ratio) make the part ambiguous, and a warning says what the scan lacked.
 //
 // Thread safety: a pure function.
 

@@ -155,19 +155,42 @@ std::vector<std::uint32_t> thinned_in_space_order(const PointCloud& scan, std::s
   return order;
 }
 
-// The points of `order` per label (flanges, then bend zones), by the label of their nearest
-// model sample.
+// The nearest model sample to scan point i. With scan normals, the nearest whose normal agrees
+// with the point's within assignment_normal_deg: springback carries a flange's points over its
+// neighbour's samples (the side panel's bottom lip, turned 6 deg by three bends and seen from
+// below, lay nearer the end wall's samples than its own and tilted that wall 0.15 deg), and
+// their normals tell them apart. A solid's samples face out of the material and the scan's
+// normals toward the scanner, so the skin seen agrees in sign; a surface model's faces are
+// oriented either way.
+std::optional<Neighbor> assignment_sample(const LocalFitTarget& target, const PointCloud& scan,
+                                          std::uint32_t i, const SpringbackSettings& st) {
+  const Vec3& p = scan.points[i];
+  const std::vector<Vec3>& normals = target.model().samples.normals;
+  if (!scan.has_normals() || normals.size() != target.tree().size())
+    return target.tree().nearest(p, st.assignment_distance_mm);
+  const double min_dot = std::cos(st.assignment_normal_deg * std::numbers::pi / 180.0);
+  const Vec3& n = scan.normals[i];
+  auto best = target.tree().nearest_along(p, normals, n, st.assignment_distance_mm, 0, min_dot);
+  if (target.two_skins()) return best;
+  const auto other =
+      target.tree().nearest_along(p, normals, -n, st.assignment_distance_mm, 0, min_dot);
+  if (other && (!best || other->squared_distance < best->squared_distance)) best = other;
+  return best;
+}
+
+// The points of `order` per label (flanges, then bend zones), by the label of their assignment
+// sample.
 std::vector<std::vector<std::uint32_t>> assign_points(
     const LocalFitTarget& target, const std::vector<std::int32_t>& labels, std::size_t label_count,
     const PointCloud& scan, const std::vector<std::uint32_t>& order, const SpringbackSettings& st) {
   std::vector<std::int32_t> flange_of(order.size(), kNoFlange);
-  for_each_block(
-      order.size(), kBlock, st.threads, [&](std::size_t, std::size_t lo, std::size_t hi) {
-        for (std::size_t k = lo; k < hi; ++k) {
-          const auto nn = target.tree().nearest(scan.points[order[k]], st.assignment_distance_mm);
-          if (nn) flange_of[k] = labels[nn->index];
-        }
-      });
+  for_each_block(order.size(), kBlock, st.threads,
+                 [&](std::size_t, std::size_t lo, std::size_t hi) {
+                   for (std::size_t k = lo; k < hi; ++k) {
+                     const auto nn = assignment_sample(target, scan, order[k], st);
+                     if (nn) flange_of[k] = labels[nn->index];
+                   }
+                 });
   std::vector<std::vector<std::uint32_t>> out(label_count);
   for (std::size_t k = 0; k < order.size(); ++k)
     if (flange_of[k] != kNoFlange) out[static_cast<std::size_t>(flange_of[k])].push_back(order[k]);
@@ -238,7 +261,7 @@ void add_dense_points(const LocalFitTarget& target, const std::vector<std::int32
                ((b.axes * (p - b.centre)).cwiseAbs().array() <= b.half.array()).all();
       });
       if (!inside) continue;
-      const auto nn = target.tree().nearest(p, st.assignment_distance_mm);
+      const auto nn = assignment_sample(target, scan, static_cast<std::uint32_t>(i), st);
       if (!nn) continue;
       const std::int32_t label = labels[nn->index];
       if (label >= 0 && static_cast<std::size_t>(label) < flanges && small[label])

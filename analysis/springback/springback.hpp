@@ -43,6 +43,8 @@ struct SpringbackSettings {
   double bend_margin_fraction = 0.2;    ///< of the flange's depth from its nearest bend axis
   double min_bend_margin_mm = 0.5;      ///< the margin's floor (bend zone, noise, alignment)
   double assignment_distance_mm = 5.0;  ///< scan points farther from the model are left out
+  double assignment_normal_deg = 30.0;  ///< with scan normals: a point takes the nearest model
+                                        ///< sample whose normal is within this of its own
   /// Fewer points: not fitted, its bends are not measured. The floor of a plane fit with
   /// outlier rejection; whether a fitted flange fixes its bend angle is max_angle_sigma_deg's.
   int min_points_per_flange = 50;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <numbers>
 #include <random>
 #include <thread>
 
@@ -129,6 +130,28 @@ TEST(KdTree, NearestAlongMatchesBruteForceWithAndWithoutRank) {
   EXPECT_GT(rejected_by_rank, 0);  // the rank limit was exercised
   // A point facing nowhere near the direction, and normals of the wrong count: nothing.
   EXPECT_FALSE(tree.nearest_along(Vec3::Zero(), std::vector<Vec3>(3), Vec3::UnitZ()).has_value());
+}
+
+// With a floor on the dot product (unit vectors: the largest angle between the normals), the
+// nearest point whose normal lies within 30 deg of the direction.
+TEST(KdTree, NearestAlongWithinAnAngleMatchesBruteForce) {
+  const auto points = testing::uniform_points(4000, 31, -50.0, 50.0);
+  std::vector<Vec3> normals = testing::uniform_points(points.size(), 32, -1.0, 1.0);
+  for (Vec3& n : normals) n.normalize();
+  KdTree tree(points);
+  const auto queries = testing::uniform_points(200, 33, -50.0, 50.0);
+  const double min_dot = std::cos(30.0 * std::numbers::pi / 180.0);
+  for (std::size_t k = 0; k < queries.size(); ++k) {
+    const Vec3 dir = testing::uniform_points(1, 400 + unsigned(k), -1.0, 1.0)[0].normalized();
+    const auto all = brute_force(points, queries[k]);
+    std::size_t rank = 0;
+    while (rank < all.size() && !(normals[all[rank].index].dot(dir) > min_dot)) ++rank;
+    ASSERT_LT(rank, all.size());
+    const auto found = tree.nearest_along(queries[k], normals, dir, 1e9, 0, min_dot);
+    ASSERT_TRUE(found.has_value());
+    EXPECT_EQ(found->index, all[rank].index);
+    EXPECT_GT(normals[found->index].dot(dir), min_dot);
+  }
 }
 
 TEST(KdTree, KnnAlongMatchesBruteForce) {
