@@ -56,14 +56,15 @@ struct OrientationSettings {
   /// Decisive points (registration/orientation_settle.hpp): scan points (evenly strided) whose
   /// exact distance under every settled orientation is compared.
   std::size_t decisive_points = 100000;
-  double decisive_margin_mm = 0.15;      ///< a point one orientation leaves this much farther off
-  double decisive_sigmas = 6.0;          ///< the surface than the other (or this many robust
-                                         ///< sigmas of all points' differences, when more) ...
-  double decisive_far_ratio = 3.0;       ///< ... and at least this many times as far, tells
-                                         ///< against it
+  double decisive_margin_mm = 0.15;  ///< a point one orientation leaves this much farther off
+  double decisive_sigmas = 6.0;      ///< the surface than the other (or this many robust
+                                     ///< sigmas of all points' differences, when more) ...
+  double decisive_far_ratio = 3.0;   ///< ... and at least this many times as far, tells
+                                     ///< against it, by that difference up to:
+  double decisive_cap_mm = 2.0;
   std::size_t min_decisive_points = 10;  ///< an orientation wins when this many points tell
-  double decisive_ratio = 0.25;          ///< against each other one and at most this share of
-                                         ///< that many tell against it
+  double decisive_ratio = 0.25;          ///< against each other one and the evidence against it
+                                         ///< is at most this share of theirs
   double distinct_pose_deg = 5.0;        ///< orientations farther apart than this are distinct
   double equivalent_rms_mm = 0.02;       ///< the model moved by the motion between two finalists
                                          ///< (centroid kept, refined onto itself) fits itself

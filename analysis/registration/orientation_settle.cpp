@@ -80,9 +80,12 @@ std::vector<double> exact_distances(const std::vector<Vec3>& points, const Trans
 // sigmas of all points' differences, how far apart the two fits lie) and decisive_far_ratio
 // times as far. The ratio keeps out the points both leave off the surface: a springback-turned
 // flange that the two fits spread differently (the side panel's bend lines, 0.23 against
-// 0.13 mm, told against its right orientation before it).
+// 0.13 mm, told against its right orientation before it). The evidence is weighed by how much
+// farther (up to decisive_cap_mm): a notch's points lie millimetres off under the wrong
+// orientation, an outlier or a rim point that happens to qualify a few tenths.
 struct DecisiveCounts {
   std::vector<std::vector<std::size_t>> against;  // [a][b]: points a fits and b leaves off
+  std::vector<std::vector<double>> excess_mm;     // [a][b]: their summed excess, capped
   double margin_mm = 0.0;                         // the largest margin of a pair
 };
 
@@ -98,33 +101,38 @@ double robust_sigma(std::vector<double> d) {
 
 DecisiveCounts count_decisive(const std::vector<Settled>& all, const OrientationSettings& s) {
   const std::size_t n = all.size();
-  DecisiveCounts out{std::vector<std::vector<std::size_t>>(n, std::vector<std::size_t>(n, 0)), 0.0};
+  DecisiveCounts out{std::vector<std::vector<std::size_t>>(n, std::vector<std::size_t>(n, 0)),
+                     std::vector<std::vector<double>>(n, std::vector<double>(n, 0.0)), 0.0};
+  const auto tell = [&](std::size_t a, std::size_t b, double d_a, double d_b, double margin) {
+    if (!(d_b - d_a > margin && d_b > s.decisive_far_ratio * d_a)) return;
+    ++out.against[a][b];
+    out.excess_mm[a][b] += std::min(d_b - d_a, s.decisive_cap_mm);
+  };
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b) {
       const std::vector<double>&da = all[a].decisive_mm, &db = all[b].decisive_mm;
       std::vector<double> diff(da.size());
       for (std::size_t i = 0; i < da.size(); ++i) diff[i] = db[i] - da[i];
-      const double margin = std::max(s.decisive_margin_mm, s.decisive_sigmas * robust_sigma(diff));
+      const double margin =
+          std::max(s.decisive_margin_mm, s.decisive_sigmas * robust_sigma(std::move(diff)));
       out.margin_mm = std::max(out.margin_mm, margin);
       for (std::size_t i = 0; i < da.size(); ++i) {
-        out.against[a][b] += diff[i] > margin && db[i] > s.decisive_far_ratio * da[i];
-        out.against[b][a] += -diff[i] > margin && da[i] > s.decisive_far_ratio * db[i];
+        tell(a, b, da[i], db[i], margin);
+        tell(b, a, db[i], da[i], margin);
       }
     }
   return out;
 }
 
-// The orientation that enough points favour over every other while few favour the other.
+// The orientation that at least min_decisive_points favour over every other, with at most
+// decisive_ratio of that evidence for the other.
 std::optional<std::size_t> decisive_winner(const DecisiveCounts& c, const OrientationSettings& s) {
   const std::size_t n = c.against.size();
   for (std::size_t w = 0; w < n; ++w) {
     bool wins = true;
-    for (std::size_t k = 0; k < n && wins; ++k) {
-      if (k == w) continue;
-      const std::size_t for_w = c.against[w][k], for_k = c.against[k][w];
-      wins = for_w >= s.min_decisive_points &&
-             static_cast<double>(for_k) <= s.decisive_ratio * static_cast<double>(for_w);
-    }
+    for (std::size_t k = 0; k < n && wins; ++k)
+      wins = k == w || (c.against[w][k] >= s.min_decisive_points &&
+                        c.excess_mm[k][w] <= s.decisive_ratio * c.excess_mm[w][k]);
     if (wins) return w;
   }
   return std::nullopt;
@@ -233,8 +241,8 @@ std::size_t decide(const std::vector<Settled>& all, const GlobalFitSettings& set
     double worst = 0.0;
     for (std::size_t k = 0; k < all.size(); ++k)
       if (k != *by_points)
-        worst = std::max(worst, static_cast<double>(counts.against[k][*by_points] + 1) /
-                                    static_cast<double>(counts.against[*by_points][k] + 1));
+        worst = std::max(worst, (counts.excess_mm[k][*by_points] + counts.margin_mm) /
+                                    (counts.excess_mm[*by_points][k] + counts.margin_mm));
     choice.ambiguity = worst;
     choice.decided_by = "decisive points";
     return *by_points;
