@@ -23,6 +23,7 @@
 #include "analysis/preprocess/normals.hpp"
 #include "analysis/preprocess/reduction.hpp"
 #include "analysis/registration/datum.hpp"
+#include "analysis/registration/facing.hpp"
 #include "analysis/registration/global_fit.hpp"
 #include "analysis/registration/orientation_settle.hpp"
 
@@ -268,6 +269,35 @@ const std::vector<Vec3>& normals_of(const PointCloud& scan) {
   return scan.normals.size() == scan.size() ? scan.normals : kNoNormals;
 }
 
+// The scan points the exact-surface updates pair (global_fit.hpp, finish_on_exact_surface): an
+// evenly strided sample of `count`, with the scan's normals when it has them. A points-only
+// scan of a solid lends a point the normal of its nearest fit point (estimated there and turned
+// toward the scanner's viewpoint, fit_point_normals), so that the facing rule holds: without
+// it a point near a closed hem (four skins within 1.8 mm) paired across the sheet, and the
+// cover flange's points-only field went 0.3 -> 1.2 mm. Only where that normal faces the
+// viewpoint within 60 deg: a standing wall's estimated normal is horizontal, and its sign, which
+// the viewpoint decides by a small vertical part, is a guess (a wall seen from both sides by
+// two passes got either skin's). Such points are left out of the updates. Empty normals: a
+// surface model, no rule.
+FacingSample exact_update_points(const PointCloud& scan, const PointCloud& fit_points,
+                                 const std::vector<Vec3>& fit_normals, const Vec3& viewpoint,
+                                 std::size_t count) {
+  if (!normals_of(scan).empty() || fit_normals.empty())
+    return facing_sample(scan.points, normals_of(scan), count);
+  constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
+  const KdTree fit_tree(fit_points.points);
+  FacingSample out;
+  for (const Vec3& p : strided_sample(scan.points, count)) {
+    const auto nn = fit_tree.nearest(p);
+    if (!nn) continue;
+    const Vec3& n = fit_normals[nn->index];
+    if (n.dot((viewpoint - p).normalized()) < kMinFacingViewpoint) continue;
+    out.points.push_back(p);
+    out.normals.push_back(n);
+  }
+  return out;
+}
+
 // True when a bend's inner radius is below the model samples' spacing: there a scan point's
 // nearest sample lies up to a spacing away along a tight curve, and its tangent plane is off the
 // surface by about d^2 / 2R toward the convex side (a closed hem's 0.05 mm fold tilted the cover
@@ -340,13 +370,15 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                         config->global_fit, *fit_normals);
   if (!fit) return fit.error();
   // Its last updates on the exact CAD surface, on the scan's own points, where the samples'
-  // tangent planes are biased (a bend radius below their spacing). On a solid only with the
-  // scanner's normals: without the facing rule a point near a closed hem (four skins within
-  // 1.8 mm) may pair across the sheet (the cover flange's points-only field went 0.3 -> 1.2 mm).
-  const bool facing_known = fit_normals->empty() || !normals_of(scan).empty();
+  // tangent planes are biased (a bend radius below their spacing).
   const SurfaceDistance* exact_updates =
-      facing_known && samples_biased_at_bends(model, model_tree) ? model.distance.get() : nullptr;
-  if (auto error = finish_on_exact_surface(scan.points, normals_of(scan), exact_updates,
+      samples_biased_at_bends(model, model_tree) ? model.distance.get() : nullptr;
+  const FacingSample exact_points =
+      exact_updates
+          ? exact_update_points(scan, reduced->scan_for_fit, *fit_normals,
+                                config->normals.viewpoint, config->global_fit.exact_points)
+          : FacingSample{};
+  if (auto error = finish_on_exact_surface(exact_points.points, exact_points.normals, exact_updates,
                                            config->global_fit, fit->icp))
     return *error;
   if (exact_updates) {  // the fit's figures follow its pose
@@ -361,9 +393,10 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   if (!pinned) return pinned.error();
   fit->T_cad_scan = pinned->T_cad_scan;
   // A near-symmetric part's rival orientations compared on converged fits.
-  pinned = settle_orientation({reduced->scan_for_fit.points, *fit_normals, scan.points,
-                               normals_of(scan), model, model_tree, exact_updates},
-                              config->global_fit, *fit, std::move(*pinned));
+  pinned = settle_orientation(
+      {reduced->scan_for_fit.points, *fit_normals, scan.points, exact_points.points,
+       exact_points.normals, model, model_tree, exact_updates},
+      config->global_fit, *fit, std::move(*pinned));
   if (!pinned) return pinned.error();
   to_proto(*fit, config->global_fit, report.mutable_global_fit());
   to_proto(pinned->free_directions, report.mutable_global_fit());

@@ -6,9 +6,9 @@ namespace springscan::analysis {
 
 std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec3>& normals,
                                        const Vec3& query, const Vec3& normal,
-                                       double max_distance_mm) {
+                                       double max_distance_mm, double min_dot) {
   if (normal.isZero()) return tree.nearest(query, max_distance_mm);
-  return tree.nearest_along(query, normals, normal, max_distance_mm, kFacingRank);
+  return tree.nearest_along(query, normals, normal, max_distance_mm, kFacingRank, min_dot);
 }
 
 double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& normals,
@@ -19,16 +19,16 @@ double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& norm
 }
 
 IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
-                                   const std::vector<Vec3>& source_normals,
-                                   double max_distance_mm) {
+                                   const std::vector<Vec3>& source_normals, double max_distance_mm,
+                                   double min_dot) {
   const double limit =
       max_distance_mm > 0.0 ? max_distance_mm : std::numeric_limits<double>::infinity();
-  return [&tree, &normals, &source_normals, limit](const std::vector<Vec3>& source,
-                                                   const Transform& T, std::size_t begin,
-                                                   std::size_t end, std::vector<IcpPair>& pairs) {
+  return [&tree, &normals, &source_normals, limit, min_dot](
+             const std::vector<Vec3>& source, const Transform& T, std::size_t begin,
+             std::size_t end, std::vector<IcpPair>& pairs) {
     for (std::size_t i = begin; i < end; ++i) {
-      const auto hit =
-          nearest_facing(tree, normals, T * source[i], T.linear() * source_normals[i], limit);
+      const auto hit = nearest_facing(tree, normals, T * source[i], T.linear() * source_normals[i],
+                                      limit, min_dot);
       IcpPair& p = pairs[i];
       p.valid = hit.has_value();
       if (!hit) continue;

@@ -26,9 +26,11 @@ inline constexpr std::size_t kFacingRank = 16;
 /// has a positive dot product with `normal`, when it is among the query's kFacingRank nearest
 /// (KdTree::nearest_along); the nearest point when `normal` is zero (a scan point whose normal
 /// is undefined). Nothing otherwise.
+/// With `min_dot` the dot product must exceed that instead (unit normals: the cosine of the
+/// largest angle between them).
 std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec3>& normals,
                                        const Vec3& query, const Vec3& normal,
-                                       double max_distance_mm);
+                                       double max_distance_mm, double min_dot = 0.0);
 
 /// The squared distance from `query` to the nearest sample facing `normal` (as nearest_facing,
 /// no limit); infinity when no sample faces that way.
@@ -39,7 +41,8 @@ double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& norm
 /// Holds references to all three vectors; `source_normals` must have one normal per point of
 /// the source the search is called with, `normals` one per tree point.
 IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
-                                   const std::vector<Vec3>& source_normals, double max_distance_mm);
+                                   const std::vector<Vec3>& source_normals, double max_distance_mm,
+                                   double min_dot = 0.0);
 
 /// An evenly strided sample of points with their normals picked alike (strided_sample picks by
 /// position in the vector only); `normals` empty when the source has none (no facing rule).

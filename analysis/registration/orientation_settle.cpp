@@ -310,8 +310,8 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
         errors[k] = icp_fit.message();
         return;
       }
-      if (auto e = finish_on_exact_surface(in.scan, in.scan_normals, in.exact_updates, serial,
-                                           *icp_fit)) {
+      if (auto e = finish_on_exact_surface(in.exact_points, in.exact_normals, in.exact_updates,
+                                           serial, *icp_fit)) {
         errors[k] = e->message;
         return;
       }

@@ -11,8 +11,8 @@
 // features, when those tell them apart; else by the decisive points, the scan points that one
 // orientation leaves far off the surface and another fits (a notch or hole only one of them
 // has; orientation_settle.cpp); else by the same error against the exact CAD surface on the
-// same fit points (exact_surface_score), the lowest winning. Two that stay within noise of each other
-// (symmetry_warning_ratio) make the part ambiguous, and a warning says what the scan lacked.
+// same fit points (exact_surface_score), the lowest winning. Two that stay within noise of each
+// other (symmetry_warning_ratio) make the part ambiguous, and a warning says what the scan lacked.
 //
 // Thread safety: a pure function.
 
@@ -27,12 +27,13 @@
 namespace springscan::analysis {
 
 struct OrientationSettleInput {
-  const std::vector<Vec3>& fit_points;    ///< the global fit's scan points, scan frame
-  const std::vector<Vec3>& fit_normals;   ///< one per fit point (facing rule), or empty
-  const std::vector<Vec3>& scan;          ///< the whole scan, scan frame (the boundary's ends)
-  const std::vector<Vec3>& scan_normals;  ///< one per scan point, or empty
-  const PartModel& model;                 ///< with its exact distance; without, nothing is settled
-  const KdTree& model_tree;               ///< over model.samples.points
+  const std::vector<Vec3>& fit_points;     ///< the global fit's scan points, scan frame
+  const std::vector<Vec3>& fit_normals;    ///< one per fit point (facing rule), or empty
+  const std::vector<Vec3>& scan;           ///< the whole scan, scan frame (the boundary's ends)
+  const std::vector<Vec3>& exact_points;   ///< the exact-surface updates' scan points ...
+  const std::vector<Vec3>& exact_normals;  ///< ... and their normals (one each), or empty
+  const PartModel& model;                  ///< with its exact distance; without, nothing is settled
+  const KdTree& model_tree;                ///< over model.samples.points
   /// The exact distance when the global fit ended with its updates on the exact surface
   /// (finish_on_exact_surface), so that the rivals end alike; null: they did not.
   const SurfaceDistance* exact_updates = nullptr;
