@@ -3,6 +3,8 @@
 // bends, and exact distance queries. No OpenCASCADE type appears here: analysis/cad_*.cpp
 // builds a PartModel from IGES/STEP, tests and simulators build one from synthetic geometry.
 
+#include <cmath>
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -64,6 +66,24 @@ class SurfaceDistance {
     return closest(query);
   }
 };
+
+/// For i in [begin, end): out(i, closest(query(i))), each query told the distance to the previous
+/// one's foot as its bound (SurfaceDistance::closest_within). A scan comes line by line, so that
+/// bound is tight and prunes the search; the answers are those of closest().
+template <typename Query, typename Out>
+void closest_in_order(const SurfaceDistance& distance, std::size_t begin, std::size_t end,
+                      Query&& query, Out&& out) {
+  Vec3 previous_foot = Vec3::Zero();
+  bool have_foot = false;
+  for (std::size_t i = begin; i < end; ++i) {
+    const Vec3 q = query(i);
+    const SurfaceHit hit =
+        have_foot ? distance.closest_within(q, (q - previous_foot).norm()) : distance.closest(q);
+    out(i, hit);
+    have_foot = std::isfinite(hit.signed_distance_mm);
+    previous_foot = hit.foot;
+  }
+}
 
 /// Everything the pipeline needs of the CAD side.
 struct PartModel {

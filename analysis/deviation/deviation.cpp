@@ -176,17 +176,11 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
     // and that bound prunes the search (SurfaceDistance::closest_within).
     parallel_blocks(
         scan_in_cad.size(), settings.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-          Vec3 previous_foot = Vec3::Zero();
-          bool have_foot = false;
-          for (std::size_t i = begin; i < end; ++i) {
-            const Vec3& q = scan_in_cad[i];
-            const SurfaceHit hit =
-                have_foot ? model.distance->closest_within(q, (q - previous_foot).norm())
-                          : model.distance->closest(q);
-            result.signed_distance_mm[i] = hit.signed_distance_mm;
-            have_foot = std::isfinite(hit.signed_distance_mm);
-            previous_foot = hit.foot;
-          }
+          closest_in_order(
+              *model.distance, begin, end, [&](std::size_t i) { return scan_in_cad[i]; },
+              [&](std::size_t i, const SurfaceHit& hit) {
+                result.signed_distance_mm[i] = hit.signed_distance_mm;
+              });
         });
   } else {
     // Tangent plane of the nearest sample: exact on flat faces, and the sign says whether the

@@ -138,13 +138,11 @@ Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
                                       const std::vector<Vec3>& scan_normals,
                                       const SurfaceDistance& exact, const Transform& start,
                                       const GlobalFitSettings& settings) {
-  const FacingSample sample = facing_sample(scan, scan_normals, settings.exact_points);
   IcpSettings on_surface = settings.icp;
   on_surface.max_iterations = settings.exact_iterations;
-  auto fit =
-      icp(sample.points,
-          exact_surface_pairs(exact, sample.normals, settings.icp.max_correspondence_distance_mm),
-          start, on_surface);
+  auto fit = icp(
+      scan, exact_surface_pairs(exact, scan_normals, settings.icp.max_correspondence_distance_mm),
+      start, on_surface);
   if (!fit) return fit.error().prepend("global fit: on the exact surface: ");
   return fit;
 }

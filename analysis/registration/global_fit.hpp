@@ -31,7 +31,8 @@ struct GlobalFitSettings {
   IcpSettings icp;                      ///< the final ICP
   int exact_iterations = 3;             ///< then at most this many updates paired on the exact
                                         ///< CAD surface, when there is one (0: none)
-  std::size_t exact_points = 20'000;    ///< ... on this many of the scan's own points (strided)
+  std::size_t exact_points = 20'000;    ///< ... on this many of the scan's own points (strided;
+                                        ///< the pipeline picks them)
   BoundarySettings boundary;            ///< free directions fixed by the part's ends (pipeline)
 };
 
@@ -71,8 +72,9 @@ Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model
 
 /// `fit` continued from its pose by at most settings.exact_iterations ICP updates whose pairs
 /// are the exact CAD surface's closest points and normals (`exact`; nothing when it is null or
-/// exact_iterations is 0), on an evenly strided sample of settings.exact_points of the scan's
-/// own points (with their normals, if any, the facing rule). A sample's tangent plane lies off
+/// exact_iterations is 0), on `scan`: the caller's sample of the scan's own points (the
+/// pipeline's is settings.exact_points of them, evenly strided), with `scan_normals` one per
+/// point for the facing rule, or empty. A sample's tangent plane lies off
 /// the surface by about d^2 / 2R at a distance d from a radius R, always toward the convex side:
 /// at a closed hem's 0.05 mm fold that biased the cover flange's fit by 0.16 deg and 0.16 mm
 /// (docs/alignment.md). The scan's own points, not the fit's voxel centroids: on a solid scanned

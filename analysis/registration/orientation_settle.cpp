@@ -54,21 +54,13 @@ struct Settled {
   std::vector<double> decisive_mm;  // |exact distance| of each decisive point (NaN: none)
 };
 
-// |exact distance| of every point under T. A strided scan still comes nearly line by line: the
-// previous point's foot bounds the next point's distance (SurfaceDistance::closest_within).
+// |exact distance| of every point under T (in scan order: closest_in_order).
 std::vector<double> exact_distances(const std::vector<Vec3>& points, const Transform& T,
                                     const SurfaceDistance& exact) {
   std::vector<double> d(points.size());
-  Vec3 previous_foot = Vec3::Zero();
-  bool have_foot = false;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Vec3 q = T * points[i];
-    const SurfaceHit hit =
-        have_foot ? exact.closest_within(q, (q - previous_foot).norm()) : exact.closest(q);
-    d[i] = std::abs(hit.signed_distance_mm);
-    have_foot = std::isfinite(hit.signed_distance_mm);
-    previous_foot = hit.foot;
-  }
+  closest_in_order(
+      exact, 0, points.size(), [&](std::size_t i) { return Vec3(T * points[i]); },
+      [&](std::size_t i, const SurfaceHit& hit) { d[i] = std::abs(hit.signed_distance_mm); });
   return d;
 }
 
@@ -249,9 +241,9 @@ std::size_t decide(const std::vector<Settled>& all, const GlobalFitSettings& set
   }
   std::size_t winner = 0;
   choice.ambiguity = rank(all, &Settled::whole_mm2, winner);
-  if (choice.ambiguity > settings.symmetry_warning_ratio) winner = 0;
   choice.decided_by = "converged surface";
   if (choice.ambiguity > settings.symmetry_warning_ratio) {
+    winner = 0;
     std::ostringstream text;
     text << "global fit: no scan point tells the orientations apart (points more than "
          << counts.margin_mm << " mm farther off the surface under one than under another:";

@@ -89,6 +89,14 @@ std::vector<int> skin_layers(const std::vector<Vec3>& source, const Vec3& axis, 
   return side;
 }
 
+// A flange's points pair only with samples whose normal is within 60 deg of the skin they see:
+// its own skin (and the bend zone beside it), never the sheet's edge faces and hole walls, whose
+// normals lie in the flange's plane. Without scan normals every point of a flange takes the
+// flange's normal (seen_side_normals), and the side panel's 15 mm tab, 81 points, took 12 of
+// them from its edges and a hole's rim, paired with those faces' samples (a dot product of
+// rounding size, positive): its bend came out 0.05 deg off.
+constexpr double kLocalFacingMinDot = 0.5;
+
 // On a solid sheet both skins of a flange lie within a sheet thickness of its scan points, and
 // a nearest-sample pair may cross the sheet: the fit then settles between the skins (its rms
 // near half the thickness). The skin the scan sees is the one most points' nearest samples lie
@@ -99,14 +107,6 @@ std::vector<int> skin_layers(const std::vector<Vec3>& source, const Vec3& axis, 
 // gave all of them one, and the front panel's and cover flange's walls fitted between their
 // skins at rms 1 mm. A scan that brings its normals (toward the scanner) says it per point
 // instead. A surface model has one skin: nearest pairs.
-// A flange's points pair only with samples whose normal is within 60 deg of the skin they see:
-// its own skin (and the bend zone beside it), never the sheet's edge faces and hole walls, whose
-// normals lie in the flange's plane. Without scan normals every point of a flange takes the
-// flange's normal (seen_side_normals), and the side panel's 15 mm tab, 81 points, took 12 of
-// them from its edges and a hole's rim, paired with those faces' samples (a dot product of
-// rounding size, positive): its bend came out 0.05 deg off.
-constexpr double kLocalFacingMinDot = 0.5;
-
 std::vector<Vec3> seen_side_normals(const KdTree& tree, const std::vector<Vec3>& normals,
                                     const std::vector<Vec3>& source, double thickness) {
   // The flange's normal direction, sign aside: the principal axis of the nearest samples'

@@ -155,20 +155,25 @@ std::vector<std::uint32_t> thinned_in_space_order(const PointCloud& scan, std::s
   return order;
 }
 
+// cos(assignment_normal_deg): the assignment's floor on the dot product of unit normals.
+double assignment_min_dot(const SpringbackSettings& st) {
+  return std::cos(st.assignment_normal_deg * std::numbers::pi / 180.0);
+}
+
 // The nearest model sample to scan point i. With scan normals, the nearest whose normal agrees
 // with the point's within assignment_normal_deg: springback carries a flange's points over its
 // neighbour's samples (the side panel's bottom lip, turned 6 deg by three bends and seen from
 // below, lay nearer the end wall's samples than its own and tilted that wall 0.15 deg), and
 // their normals tell them apart. A solid's samples face out of the material and the scan's
 // normals toward the scanner, so the skin seen agrees in sign; a surface model's faces are
-// oriented either way.
+// oriented either way. `min_dot`: assignment_min_dot(st), computed once by the caller.
 std::optional<Neighbor> assignment_sample(const LocalFitTarget& target, const PointCloud& scan,
-                                          std::uint32_t i, const SpringbackSettings& st) {
+                                          std::uint32_t i, const SpringbackSettings& st,
+                                          double min_dot) {
   const Vec3& p = scan.points[i];
   const std::vector<Vec3>& normals = target.model().samples.normals;
   if (!scan.has_normals() || normals.size() != target.tree().size())
     return target.tree().nearest(p, st.assignment_distance_mm);
-  const double min_dot = std::cos(st.assignment_normal_deg * std::numbers::pi / 180.0);
   const Vec3& n = scan.normals[i];
   auto best = target.tree().nearest_along(p, normals, n, st.assignment_distance_mm, 0, min_dot);
   if (target.two_skins()) return best;
@@ -184,10 +189,11 @@ std::vector<std::vector<std::uint32_t>> assign_points(
     const LocalFitTarget& target, const std::vector<std::int32_t>& labels, std::size_t label_count,
     const PointCloud& scan, const std::vector<std::uint32_t>& order, const SpringbackSettings& st) {
   std::vector<std::int32_t> flange_of(order.size(), kNoFlange);
+  const double min_dot = assignment_min_dot(st);
   for_each_block(order.size(), kBlock, st.threads,
                  [&](std::size_t, std::size_t lo, std::size_t hi) {
                    for (std::size_t k = lo; k < hi; ++k) {
-                     const auto nn = assignment_sample(target, scan, order[k], st);
+                     const auto nn = assignment_sample(target, scan, order[k], st, min_dot);
                      if (nn) flange_of[k] = labels[nn->index];
                    }
                  });
@@ -251,6 +257,7 @@ void add_dense_points(const LocalFitTarget& target, const std::vector<std::int32
   }
   for (Box& b : boxes) b.half.array() += kDenseBoxMm;
   const std::size_t n = scan.size();
+  const double min_dot = assignment_min_dot(st);
   std::vector<std::vector<std::pair<std::int32_t, std::uint32_t>>> found(block_count(n));
   parallel_blocks(n, st.threads, [&](std::size_t block, std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i) {
@@ -261,7 +268,7 @@ void add_dense_points(const LocalFitTarget& target, const std::vector<std::int32
                ((b.axes * (p - b.centre)).cwiseAbs().array() <= b.half.array()).all();
       });
       if (!inside) continue;
-      const auto nn = assignment_sample(target, scan, static_cast<std::uint32_t>(i), st);
+      const auto nn = assignment_sample(target, scan, static_cast<std::uint32_t>(i), st, min_dot);
       if (!nn) continue;
       const std::int32_t label = labels[nn->index];
       if (label >= 0 && static_cast<std::size_t>(label) < flanges && small[label])
