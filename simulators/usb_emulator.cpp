@@ -145,20 +145,24 @@ EmulatedUsbScanner::~EmulatedUsbScanner() {
 }
 
 void EmulatedUsbScanner::unplug() {
-  std::lock_guard lock(impl_->mutex);
-  impl_->disconnect_locked();
+  {
+    std::lock_guard lock(impl_->mutex);
+    if (!impl_->plugged || impl_->unplugging) return;
+    impl_->unplugging = true;
+  }
+  impl_->disconnect();  // on the caller's thread: unplugged when this returns
 }
 
 void EmulatedUsbScanner::plug() {
   std::vector<std::thread> threads;
   {
     std::lock_guard lock(impl_->mutex);
-    if (impl_->plugged) return;
     threads.swap(impl_->hotplug_threads);
   }
-  for (auto& t : threads) t.join();  // the removal must be finished before the device returns
+  for (auto& t : threads) t.join();  // a removal under way must be finished first
   {
     std::lock_guard lock(impl_->mutex);
+    if (impl_->plugged) return;
     impl_->device = std::make_unique<ScannerDevice>(impl_->device_settings, impl_->surface);
     impl_->in_halted = false;
     ++impl_->generation;

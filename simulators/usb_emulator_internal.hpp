@@ -48,6 +48,7 @@ struct EmulatedUsbScanner::Impl {
   mutable std::mutex mutex;  // guards everything below
   std::unique_ptr<ScannerDevice> device;
   bool plugged = false;
+  bool unplugging = false;  // the cable is out, the "remove" uevent not yet sent: device silent
   bool in_halted = false;
   int generation = 0;                           // increments per plug
   std::map<UMockdevIoctlClient*, int> clients;  // the generation each client opened
@@ -59,8 +60,16 @@ struct EmulatedUsbScanner::Impl {
 
   /// Completes queued IN URBs from the device's output; runs the device's fault events.
   void fill_locked();
-  /// The cable is pulled: queued URBs fail with -ESHUTDOWN; the uevent is sent by a thread.
-  void disconnect_locked();
+  /// A fault pulls the cable during a transfer (on umockdev's worker thread): the device goes
+  /// silent at once and disconnect() runs on a hotplug thread.
+  void start_disconnect_locked();
+  /// Sends the "remove" uevent, then fails the queued URBs with -ESHUTDOWN and marks the device
+  /// unplugged, then removes it from the testbed. In that order: umockdev 0.17 (Debian 12)
+  /// abort()s the emulating process when a client closes its udev monitor between the uevent
+  /// sender's connect() and sendmsg(), and a client that sees its URBs fail may exit (closing
+  /// its monitor) at once; this way every client is still waiting on the device while the
+  /// uevent goes out. Called with `unplugging` set and the mutex not held.
+  void disconnect();
   /// True when `client` opened the device node of the device that is plugged in now.
   bool live_locked(UMockdevIoctlClient* client);
   /// Answers one usbfs ioctl (usb_ioctl.cpp), after forgetting the closed clients.

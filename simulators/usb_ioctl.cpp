@@ -45,7 +45,7 @@ std::vector<UMockdevIoctlClient*> EmulatedUsbScanner::Impl::sweep_closed_clients
 }
 
 void EmulatedUsbScanner::Impl::fill_locked() {
-  if (!device || !plugged) return;
+  if (!device || !plugged || unplugging) return;
   std::vector<std::uint8_t> bytes;
   while (!pending_in.empty() && !in_halted) {
     Urb& u = pending_in.front();
@@ -53,7 +53,7 @@ void EmulatedUsbScanner::Impl::fill_locked() {
     bytes.clear();
     const std::size_t n = device->send(bytes, static_cast<std::size_t>(urb.buffer_length));
     const DeviceEvent event = device->take_event();
-    if (event == DeviceEvent::kUnplug) return disconnect_locked();
+    if (event == DeviceEvent::kUnplug) return start_disconnect_locked();
     if (n > 0) {
       std::memcpy(u.buffer->data, bytes.data(), n);
       urb.actual_length = static_cast<int>(n);
@@ -77,22 +77,31 @@ void EmulatedUsbScanner::Impl::fill_locked() {
   }
 }
 
-void EmulatedUsbScanner::Impl::disconnect_locked() {
-  if (!plugged) return;
-  plugged = false;
-  ++stats.unplugs;
-  // The kernel kills queued URBs of a vanished device with -ESHUTDOWN (LIBUSB_TRANSFER_NO_DEVICE).
-  for (Urb& u : pending_in) {
-    urb_of(u).status = -ESHUTDOWN;
-    urb_of(u).actual_length = 0;
-    done.push_back(std::move(u));
+void EmulatedUsbScanner::Impl::start_disconnect_locked() {
+  if (!plugged || unplugging) return;
+  unplugging = true;
+  hotplug_threads.emplace_back([this] { disconnect(); });
+}
+
+void EmulatedUsbScanner::Impl::disconnect() {
+  const std::string sys = "/sys" + sysfs_path;
+  umockdev_testbed_uevent(testbed, sys.c_str(), "remove");  // needs the device still in sysfs
+  {
+    std::lock_guard lock(mutex);
+    plugged = false;
+    unplugging = false;
+    ++stats.unplugs;
+    // The kernel kills queued URBs of a vanished device with -ESHUTDOWN
+    // (LIBUSB_TRANSFER_NO_DEVICE).
+    for (Urb& u : pending_in) {
+      urb_of(u).status = -ESHUTDOWN;
+      urb_of(u).actual_length = 0;
+      done.push_back(std::move(u));
+    }
+    pending_in.clear();
+    device.reset();
   }
-  pending_in.clear();
-  device.reset();
-  hotplug_threads.emplace_back([this] {
-    umockdev_testbed_uevent(testbed, ("/sys" + sysfs_path).c_str(), "remove");
-    umockdev_testbed_remove_device(testbed, ("/sys" + sysfs_path).c_str());
-  });
+  umockdev_testbed_remove_device(testbed, sys.c_str());
 }
 
 void EmulatedUsbScanner::Impl::handle_ioctl(UMockdevIoctlClient* client) {

@@ -47,12 +47,14 @@ TEST(ScannerSimProcess, UnplugReachesTheCliAsAFailureAndTheDeviceComesBack) {
   const std::string out = ::testing::TempDir() + "sim_process_tactile.ply";
   const std::string cli =
       std::string(SPRINGSCAN_CLI_EXE) + " scan --quiet --kind tactile --serial SN-HIL --out " + out;
-  // First scan: unplugged half way (exit 1); the simulator plugs the device back after 0.2 s;
-  // second scan, a new process, finds it again.
-  const std::string script = "sh -c '" + cli + "; test $? -eq 1 || exit 9; sleep 0.6; " + cli + "'";
+  // First scan: unplugged half way (exit 1); the simulator plugs the device back 0.5 s later,
+  // once the first process has surely ended (a process that closes its udev monitor while a
+  // uevent is in flight makes Debian 12's umockdev abort the simulator: usb_emulator_internal.hpp);
+  // the second scan, a new process, finds it again.
+  const std::string script = "sh -c '" + cli + "; test $? -eq 1 || exit 9; sleep 1; " + cli + "'";
   EXPECT_EQ(run(std::string(SPRINGSCAN_SIM_EXE) +
                 " --serial SN-HIL --kind tactile --duration 0.4 --unplug-at 0.5 "
-                "--replug-after 0.2 -- " +
+                "--replug-after 0.5 -- " +
                 script),
             0);
   EXPECT_TRUE(analysis::read_point_cloud(out).ok());
