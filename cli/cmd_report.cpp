@@ -2,6 +2,7 @@
 #include <google/protobuf/util/json_util.h>
 
 #include <filesystem>
+#include <system_error>
 
 #include "analysis/io/file_io.hpp"
 #include "analysis/io/point_io.hpp"
@@ -38,7 +39,8 @@ analysis::Expected<analysis::PointCloud> load_cloud(const ArgParser& args,
                                                     const Logger& logger) {
   if (args.has("cloud")) return analysis::read_point_cloud(args.get("cloud"));
   const fs::path beside = report_path.parent_path() / "deviation.ply";
-  if (!fs::exists(beside)) {
+  std::error_code ec;
+  if (!fs::exists(beside, ec)) {
     settings.missing_cloud_note =
         "deviation.ply was not found beside " + report_path.filename().string();
     logger.warning(settings.missing_cloud_note + ": rendering without the pictures");

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <system_error>
 #include <utility>
 
 #include "daemon/config.hpp"
@@ -101,6 +102,14 @@ std::string out_of_range(const Locator& at, const Locator::Path& path, T value, 
   if (value >= lo && value <= hi) return "";
   return at.where(path) + ": " + number(static_cast<double>(value)) + " is not in " +
          number(static_cast<double>(lo)) + ".." + number(static_cast<double>(hi));
+}
+
+// True for a regular file. The non-throwing form: a path the filesystem refuses (too long, a
+// component that is a file, no permission) is simply not a file here, never an exception
+// (found by fuzz_daemon_config: a 4 KB cad_file made is_regular_file throw ENAMETOOLONG).
+bool is_file(const std::string& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec) && !ec;
 }
 
 std::string resolve(const std::string& path, const std::string& config_file) {
@@ -204,7 +213,7 @@ std::string apply_parts(const v1::DaemonConfig& c, const Locator& at, const std:
              " appears twice in the catalogue";
     }
     const std::string cad = resolve(p.cad_file(), file);
-    if (cad.empty() || !fs::is_regular_file(cad)) {
+    if (cad.empty() || !is_file(cad)) {
       return at.where({{"parts", i}, {"cad_file", -1}}) + ": '" + p.cad_file() +
              "' is not a readable file" + (cad != p.cad_file() ? " (resolved to " + cad + ")" : "");
     }
@@ -323,7 +332,7 @@ std::string apply_mqtt_credentials(const v1::MqttConfig& m, const Locator& at,
     if (!f.present) continue;
     const std::string resolved = resolve(f.value, file);
     std::ifstream readable(resolved);
-    if (resolved.empty() || !fs::is_regular_file(resolved) || !readable) {
+    if (resolved.empty() || !is_file(resolved) || !readable) {
       return at.where(mqtt_path(f.name)) + ": '" + f.value + "' is not a readable file" +
              (resolved != f.value ? " (resolved to " + resolved + ")" : "");
     }

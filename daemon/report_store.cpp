@@ -69,7 +69,7 @@ ReportStore::ReportStore(ReportStore&& other) noexcept
 Expected<ReportStore> ReportStore::open(const ReportStoreSettings& settings) {
   std::error_code ec;
   fs::create_directories(settings.directory, ec);
-  if (ec || !fs::is_directory(settings.directory)) {
+  if (ec || !fs::is_directory(settings.directory, ec) || ec) {
     return fail("report_dir " + settings.directory + ": cannot create: " + ec.message());
   }
   // Interrupted writes (power loss, kill -9) left only hidden temporaries: drop them.

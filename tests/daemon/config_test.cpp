@@ -122,6 +122,26 @@ TEST_F(ConfigTest, PartCatalogueErrors) {
   EXPECT_NE(zero.message().find("parts[0].part_id: 0 is not in 1..65535"), std::string::npos);
 }
 
+// Paths the filesystem refuses to look at (found by fuzz_daemon_config: a 4 KB cad_file made
+// std::filesystem throw ENAMETOOLONG out of the parser): each is a clear config error naming
+// its field, for the part catalogue and for the MQTT files alike.
+TEST_F(ConfigTest, PathsTheFilesystemRefusesAreConfigErrors) {
+  const std::string too_long(5000, 'a');
+  const std::string through_a_file = "part.step/inside.step";  // a component that is a file
+  for (const std::string& path : {too_long, through_a_file}) {
+    auto part = parse("parts { part_id: 4 cad_file: \"" + path + "\" }\n");
+    ASSERT_FALSE(part.ok());
+    EXPECT_NE(part.message().find("parts[0].cad_file: '" + path + "' is not a readable file"),
+              std::string::npos)
+        << part.message();
+    auto mqtt = parse(std::string(kMinimal) + "mqtt { ca_file: \"" + path + "\" }\n");
+    ASSERT_FALSE(mqtt.ok());
+    EXPECT_NE(mqtt.message().find("mqtt.ca_file: '" + path + "' is not a readable file"),
+              std::string::npos)
+        << mqtt.message();
+  }
+}
+
 TEST_F(ConfigTest, OtherRangeErrors) {
   EXPECT_NE(parse(std::string(kMinimal) + "log_level: \"loud\"")
                 .message()
