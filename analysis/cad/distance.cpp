@@ -16,6 +16,12 @@ namespace {
 // only possible on degenerate models, and the nearest ones are kept.
 constexpr int kMaxCandidates = 32;
 
+// The nearest triangle of a thread's last query (closest_within).
+struct LastHit {
+  const void* owner = nullptr;  // the CadDistance that answered; only compared
+  std::uint32_t slot = 0;       // TriangleFoot::slot of its nearest triangle
+};
+
 struct Candidate {
   int face = -1;
   TriangleFoot foot;
@@ -39,11 +45,19 @@ class CadDistance final : public SurfaceDistance {
   SurfaceHit closest_within(const Vec3& query, double bound_mm) const override {
     // A surface point within bound_mm puts the nearest triangle within bound_mm + its slack.
     const double mesh_bound = bound_mm + max_slack_;
-    std::array<Candidate, kMaxCandidates> candidates;
+    // A run of queries along a scan line (closest_in_order) has its nearest triangles side by
+    // side: the search starts in the leaf of this thread's previous nearest triangle on this
+    // model (any start gives the same answer; this one is fast).
+    thread_local LastHit last;
+    const std::uint32_t start = last.owner == this ? last.slot : ~std::uint32_t{0};
+    // Reused per thread: a fresh array of kMaxCandidates feet per query, value-initialised,
+    // cost more than the search when the hit is the one triangle under the point.
+    thread_local std::vector<Candidate> candidates;
+    candidates.resize(kMaxCandidates);
     int count = 0;
     const auto& faces = shape_.mesh().triangle_faces;
-    const double nearest = bvh_.near(
-        query, max_slack_,
+    const double nearest = bvh_.near_from(
+        start, query, max_slack_,
         [&](const TriangleFoot& foot) {
           const int face = faces[foot.triangle];
           int worst = 0;
@@ -84,6 +98,7 @@ class CadDistance final : public SurfaceDistance {
       hit.foot = foot.point;
       hit.normal = foot.normal;
       hit.face_id = c.face;
+      last = {this, c.foot.slot};
       // The sign of the side the outward normal points to; on the surface itself, +0.
       hit.signed_distance_mm = (query - foot.point).dot(foot.normal) < 0.0 ? -best : best;
     }

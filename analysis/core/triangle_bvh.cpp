@@ -58,6 +58,9 @@ TriangleBvh::TriangleBvh(const std::vector<Vec3>& vertices,
   nodes_.reserve(2 * corners_.size() + 1);
   nodes_.emplace_back();
   build(0, 0, static_cast<std::uint32_t>(corners_.size()), std::clamp(settings.leaf_size, 1, 64));
+  leaf_of_.resize(corners_.size());
+  for (std::uint32_t n = 0; n < nodes_.size(); ++n)
+    for (std::uint32_t i = 0; i < nodes_[n].count; ++i) leaf_of_[nodes_[n].first + i] = n;
 }
 
 // Median split along the longest axis of the centroids' box; node 0 is the root and each inner
@@ -101,6 +104,7 @@ void TriangleBvh::build(std::uint32_t node, std::uint32_t first, std::uint32_t c
   nodes_.emplace_back();
   nodes_[node].first = left;
   nodes_[node].count = 0;
+  nodes_[left].parent = nodes_[left + 1].parent = node;
   build(left, first, half, leaf_size);
   build(left + 1, first + half, count - half, leaf_size);
 }

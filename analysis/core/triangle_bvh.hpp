@@ -19,6 +19,7 @@ namespace springscan::analysis {
 /// The closest point of one triangle to a query point.
 struct TriangleFoot {
   std::uint32_t triangle = 0;       ///< index into the triangles given at construction
+  std::uint32_t slot = 0;           ///< its place in the TriangleBvh (near_from's start)
   double squared_distance = 0.0;    ///< mm^2
   Vec3 point = Vec3::Zero();        ///< closest point on the triangle
   Vec3 barycentric = Vec3::Zero();  ///< weights of the triangle's vertices 0, 1, 2
@@ -53,36 +54,70 @@ class TriangleBvh {
   /// and returns the bound.
   template <typename OnTriangle>
   double near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle,
-              double bound_mm = std::numeric_limits<double>::infinity()) const;
+              double bound_mm = std::numeric_limits<double>::infinity()) const {
+    return nodes_.empty() ? 0.0 : search(0, query, slack_mm, on_triangle, bound_mm);
+  }
+
+  /// near(), the same triangles reported and the same distance returned, searched first in the
+  /// leaf of `start_slot` (a TriangleFoot::slot) and then outwards: for each level above it, the
+  /// other child's subtree, pruned by one box test when it lies beyond the bound. For a run of
+  /// neighbouring queries (a scan, line by line) started from the previous one's nearest
+  /// triangle, that first leaf bounds the distance at once and the walk down from the root
+  /// is skipped (12 % fewer instructions for the side panel's deviation, docs/performance.md).
+  /// Any start gives the same answer; one out of range searches from the root.
+  template <typename OnTriangle>
+  double near_from(std::uint32_t start_slot, const Vec3& query, double slack_mm,
+                   OnTriangle&& on_triangle,
+                   double bound_mm = std::numeric_limits<double>::infinity()) const;
 
  private:
   struct Node {
     Vec3 lo, hi;
-    std::uint32_t first = 0;  ///< leaf: first triangle; inner: left child (right = first + 1)
-    std::uint32_t count = 0;  ///< leaf: triangle count; 0 for inner nodes
+    std::uint32_t first = 0;   ///< leaf: first triangle; inner: left child (right = first + 1)
+    std::uint32_t count = 0;   ///< leaf: triangle count; 0 for inner nodes
+    std::uint32_t parent = 0;  ///< the root's is 0, itself
   };
   static double box_squared_distance(const Node& node, const Vec3& p) {
     return (p.cwiseMax(node.lo).cwiseMin(node.hi) - p).squaredNorm();
   }
   void build(std::uint32_t node, std::uint32_t first, std::uint32_t count, int leaf_size);
+  // near()'s search in the subtree of `root`, within `best` (lowered and returned).
+  template <typename OnTriangle>
+  double search(std::uint32_t root, const Vec3& query, double slack_mm, OnTriangle& on_triangle,
+                double best) const;
 
   std::vector<Node> nodes_;
+  std::vector<std::uint32_t> leaf_of_;        ///< slot (leaf order) -> its leaf node
   std::vector<std::array<Vec3, 3>> corners_;  ///< triangles in leaf order
   std::vector<std::uint32_t> original_;       ///< leaf order -> index given at construction
 };
 
 template <typename OnTriangle>
-double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_triangle,
-                         double bound_mm) const {
-  if (nodes_.empty()) return 0.0;
-  double best = bound_mm;
+double TriangleBvh::near_from(std::uint32_t start_slot, const Vec3& query, double slack_mm,
+                              OnTriangle&& on_triangle, double bound_mm) const {
+  if (start_slot >= leaf_of_.size()) return near(query, slack_mm, on_triangle, bound_mm);
+  std::uint32_t node = leaf_of_[start_slot];
+  double best = search(node, query, slack_mm, on_triangle, bound_mm);
+  // Every other triangle lies under exactly one sibling of the path from that leaf to the root.
+  while (node != 0) {
+    const std::uint32_t parent = nodes_[node].parent;
+    const std::uint32_t sibling = node == nodes_[parent].first ? node + 1 : node - 1;
+    best = search(sibling, query, slack_mm, on_triangle, best);
+    node = parent;
+  }
+  return best;
+}
+
+template <typename OnTriangle>
+double TriangleBvh::search(std::uint32_t root, const Vec3& query, double slack_mm,
+                           OnTriangle& on_triangle, double best) const {
   const auto bound2 = [&] {
     const double r = best + slack_mm;
     return r * r;
   };
   std::uint32_t stack[64];
   int top = 0;
-  stack[top++] = 0;
+  stack[top++] = root;
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
     if (box_squared_distance(node, query) > bound2()) continue;
@@ -96,6 +131,7 @@ double TriangleBvh::near(const Vec3& query, double slack_mm, OnTriangle&& on_tri
         // the nearest triangle itself then failed its own bound and was never reported.
         if (d <= best + slack_mm) {
           foot.triangle = original_[i];
+          foot.slot = i;
           on_triangle(foot);
         }
       }

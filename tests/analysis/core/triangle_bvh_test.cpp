@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
+#include <set>
 
 namespace springscan::analysis {
 namespace {
@@ -38,6 +40,46 @@ TEST(TriangleBvh, NearestMatchesBruteForceOnRandomTriangles) {
       best =
           std::min(best, closest_on_triangle(p, v[tri[0]], v[tri[1]], v[tri[2]]).squared_distance);
     EXPECT_DOUBLE_EQ(bvh.nearest(p)->squared_distance, best);
+  }
+}
+
+// near_from, whatever leaf it starts in, finds what near finds: the same nearest distance and
+// every triangle within the slack of it (a search may also report farther ones it met first).
+TEST(TriangleBvh, NearFromAnyStartFindsWhatNearFinds) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  std::vector<Vec3> v;
+  std::vector<std::array<std::uint32_t, 3>> t;
+  for (std::uint32_t i = 0; i < 400; ++i) {
+    const Vec3 a(u(rng), u(rng), 0.3 * u(rng));
+    for (int k = 0; k < 3; ++k) v.push_back(a + 0.4 * Vec3(u(rng), u(rng), 0.1 * u(rng)));
+    t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
+  }
+  const TriangleBvh bvh(v, t);
+  constexpr double kSlack = 0.3;
+  const auto within = [&](double nearest, auto&& search) {
+    std::set<std::uint32_t> found;
+    search([&](const TriangleFoot& f) {
+      if (std::sqrt(f.squared_distance) <= nearest + kSlack) found.insert(f.triangle);
+    });
+    return found;
+  };
+  std::uint32_t previous_slot = 0;
+  for (int q = 0; q < 400; ++q) {
+    const Vec3 p(u(rng), u(rng), u(rng));
+    const double nearest = bvh.near(p, kSlack, [](const TriangleFoot&) {});
+    // Starts: the previous query's nearest triangle (as CadDistance chains them), an arbitrary
+    // slot, and one out of range.
+    for (const std::uint32_t start : {previous_slot, static_cast<std::uint32_t>(q) % 400u, ~0u}) {
+      const double from = bvh.near_from(start, p, kSlack, [](const TriangleFoot&) {});
+      EXPECT_DOUBLE_EQ(from, nearest);
+      const auto plain = within(nearest, [&](auto&& f) { bvh.near(p, kSlack, f); });
+      const auto started = within(nearest, [&](auto&& f) { bvh.near_from(start, p, kSlack, f); });
+      EXPECT_EQ(started, plain) << "query " << q << " from slot " << start;
+    }
+    bvh.near(p, 0.0, [&](const TriangleFoot& f) {
+      if (std::sqrt(f.squared_distance) <= nearest) previous_slot = f.slot;
+    });
   }
 }
 
