@@ -18,6 +18,8 @@ namespace {
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr std::size_t kBlock = 4096;
 constexpr std::int32_t kNoFlange = -1;
+// A flange fit with this many scan points or more shares the threads (fit_flanges).
+constexpr std::size_t kSharedFitPoints = 20000;
 
 std::string check(const PartModel& model, const SpringbackSettings& st) {
   const PointCloud& s = model.samples;
@@ -314,6 +316,33 @@ FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const
   return out;
 }
 
+// fit_flange of every flange (assigned[f] moved out for the first seg.flanges.size()). A
+// flange's fit is a few thousand points: shared among threads, most of its time went to starting
+// them for every step of every iteration. So large flanges are fitted one after another on all
+// threads, the others side by side on one thread each; a fit's result does not depend on its
+// thread count.
+std::vector<FlangeFit> fit_flanges(const LocalFitTarget& target, const PointCloud& scan,
+                                   const std::vector<Flange>& flanges,
+                                   std::vector<std::vector<std::uint32_t>>& assigned,
+                                   const SpringbackSettings& st) {
+  std::vector<FlangeFit> out(flanges.size());
+  std::vector<std::size_t> side_by_side;
+  for (std::size_t f = 0; f < flanges.size(); ++f) {
+    if (assigned[f].size() < kSharedFitPoints) {
+      side_by_side.push_back(f);
+      continue;
+    }
+    out[f] = fit_flange(target, scan, flanges[f], std::move(assigned[f]), st);
+  }
+  SpringbackSettings one_thread = st;
+  one_thread.threads = 1;
+  parallel_tasks(side_by_side.size(), st.threads, [&](std::size_t k) {
+    const std::size_t f = side_by_side[k];
+    out[f] = fit_flange(target, scan, flanges[f], std::move(assigned[f]), one_thread);
+  });
+  return out;
+}
+
 // The median rms of the fitted flanges: the scan's noise as the fits see it (0: none fitted).
 double median_fit_rms(const SpringbackResult& result) {
   std::vector<double> rms;
@@ -534,10 +563,8 @@ Expected<SpringbackResult> measure_springback(const PartModel& model, const Poin
       assign_points(target, labels, seg.flanges.size() + zones.zones.size(), scan, order, st);
   add_dense_points(target, labels, scan, result.thinning_stride, st, assigned, seg.flanges.size());
   // 3. Fit each flange locally to the whole model.
-  for (std::size_t f = 0; f < seg.flanges.size(); ++f) {
-    result.flanges.push_back(fit_flange(target, scan, seg.flanges[f], std::move(assigned[f]), st));
-    result.flanges.back().margin_mm = margins[f];
-  }
+  result.flanges = fit_flanges(target, scan, seg.flanges, assigned, st);
+  for (std::size_t f = 0; f < seg.flanges.size(); ++f) result.flanges[f].margin_mm = margins[f];
   const double noise = median_fit_rms(result);
   // 4. Each bend from the relative rotation of its two flanges.
   const auto index_of = [&seg](int id) {
