@@ -317,10 +317,10 @@ FlangeFit fit_flange(const LocalFitTarget& target, const PointCloud& scan, const
 }
 
 // fit_flange of every flange (assigned[f] moved out for the first seg.flanges.size()). A
-// flange's fit is a few thousand points: shared among threads, most of its time went to starting
-// them for every step of every iteration. So large flanges are fitted one after another on all
-// threads, the others side by side on one thread each; a fit's result does not depend on its
-// thread count.
+// flange's fit of a few thousand points is one block of the ICP's parallel loops (kParallelBlock
+// points), so it ran on one thread while the others waited. So large flanges are fitted one
+// after another on all threads, the others side by side on one thread each; a fit's result does
+// not depend on its thread count.
 std::vector<FlangeFit> fit_flanges(const LocalFitTarget& target, const PointCloud& scan,
                                    const std::vector<Flange>& flanges,
                                    std::vector<std::vector<std::uint32_t>>& assigned,
