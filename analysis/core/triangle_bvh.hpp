@@ -63,7 +63,7 @@ class TriangleBvh {
   /// other child's subtree, pruned by one box test when it lies beyond the bound. For a run of
   /// neighbouring queries (a scan, line by line) started from the previous one's nearest
   /// triangle, that first leaf bounds the distance at once and the walk down from the root
-  /// is skipped (12 % fewer instructions for the side panel's deviation, docs/performance.md).
+  /// is skipped (8 % fewer instructions in the side panel's deviation, docs/performance.md).
   /// Any start gives the same answer; one out of range searches from the root.
   template <typename OnTriangle>
   double near_from(std::uint32_t start_slot, const Vec3& query, double slack_mm,
