@@ -21,16 +21,34 @@ TEST(TriangleBvh, NearestFindsTheTriangleThatContainsTheQuery) {
   EXPECT_LT(foot->squared_distance, 1e-20);
 }
 
+// `count` small triangles at random: centres within +-10 mm scaled by `extent` per axis,
+// corners within +-10 mm scaled by `size` of their centre.
+struct Soup {
+  std::vector<Vec3> v;
+  std::vector<std::array<std::uint32_t, 3>> t;
+};
+Soup random_triangles(std::mt19937& rng, std::uint32_t count, const Vec3& extent,
+                      const Vec3& size) {
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  const auto draw = [&] {
+    const double x = u(rng), y = u(rng);
+    return Vec3(x, y, u(rng));
+  };
+  Soup s;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const Vec3 a = draw().cwiseProduct(extent);
+    for (int k = 0; k < 3; ++k) s.v.push_back(a + draw().cwiseProduct(size));
+    s.t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
+  }
+  return s;
+}
+
 TEST(TriangleBvh, NearestMatchesBruteForceOnRandomTriangles) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-10.0, 10.0);
-  std::vector<Vec3> v;
-  std::vector<std::array<std::uint32_t, 3>> t;
-  for (std::uint32_t i = 0; i < 300; ++i) {
-    const Vec3 a(u(rng), u(rng), u(rng));
-    for (int k = 0; k < 3; ++k) v.push_back(a + 0.2 * Vec3(u(rng), u(rng), u(rng)));
-    t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
-  }
+  const Soup soup = random_triangles(rng, 300, Vec3::Ones(), Vec3::Constant(0.2));
+  const auto& v = soup.v;
+  const auto& t = soup.t;
   const TriangleBvh bvh(v, t);
   EXPECT_FALSE(TriangleBvh().nearest(Vec3::Zero()));
   for (int q = 0; q < 500; ++q) {
@@ -48,14 +66,9 @@ TEST(TriangleBvh, NearestMatchesBruteForceOnRandomTriangles) {
 TEST(TriangleBvh, NearFromAnyStartFindsWhatNearFinds) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-10.0, 10.0);
-  std::vector<Vec3> v;
-  std::vector<std::array<std::uint32_t, 3>> t;
-  for (std::uint32_t i = 0; i < 400; ++i) {
-    const Vec3 a(u(rng), u(rng), 0.3 * u(rng));
-    for (int k = 0; k < 3; ++k) v.push_back(a + 0.4 * Vec3(u(rng), u(rng), 0.1 * u(rng)));
-    t.push_back({3 * i, 3 * i + 1, 3 * i + 2});
-  }
-  const TriangleBvh bvh(v, t);
+  // Flat-ish triangles in a slab, as a tessellated sheet offers them.
+  const Soup soup = random_triangles(rng, 400, Vec3(1, 1, 0.3), Vec3(0.4, 0.4, 0.04));
+  const TriangleBvh bvh(soup.v, soup.t);
   constexpr double kSlack = 0.3;
   const auto within = [&](double nearest, auto&& search) {
     std::set<std::uint32_t> found;
