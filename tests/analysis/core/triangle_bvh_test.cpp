@@ -7,6 +7,8 @@
 #include <random>
 #include <set>
 
+#include "tests/analysis/synthetic.hpp"
+
 namespace springscan::analysis {
 namespace {
 
@@ -30,10 +32,7 @@ struct Soup {
 Soup random_triangles(std::mt19937& rng, std::uint32_t count, const Vec3& extent,
                       const Vec3& size) {
   std::uniform_real_distribution<double> u(-10.0, 10.0);
-  const auto draw = [&] {
-    const double x = u(rng), y = u(rng);
-    return Vec3(x, y, u(rng));
-  };
+  const auto draw = [&] { return testing::draw_vec3(u, rng); };
   Soup s;
   for (std::uint32_t i = 0; i < count; ++i) {
     const Vec3 a = draw().cwiseProduct(extent);
@@ -79,7 +78,7 @@ TEST(TriangleBvh, NearFromAnyStartFindsWhatNearFinds) {
   };
   std::uint32_t previous_slot = 0;
   for (int q = 0; q < 400; ++q) {
-    const Vec3 p(u(rng), u(rng), u(rng));
+    const Vec3 p = testing::draw_vec3(u, rng);
     const double nearest = bvh.near(p, kSlack, [](const TriangleFoot&) {});
     // Starts: the previous query's nearest triangle (as CadDistance chains them), an arbitrary
     // slot, and one out of range.
