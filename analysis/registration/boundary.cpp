@@ -134,7 +134,11 @@ Extent scan_extent(const std::vector<Vec3>& scan, const Transform& T, const KdTr
     const double v = u.dot(q);
     const bool near_high = v >= *model.high - window, near_low = v <= *model.low + window;
     if (!near_high && !near_low) continue;
-    if (contact(q, tree, normals).distance_mm > s.surface_distance_mm) continue;
+    // As on the model's side, points on faces that look along u are left out: a solid's end
+    // face (a wall's outer skin, a sheet's edge) seen at a slant piles its points up at the end,
+    // and the band's mean would place the end up to a band width too far out.
+    const SurfaceContact c = contact(q, tree, normals);
+    if (c.distance_mm > s.surface_distance_mm || std::abs(c.normal.dot(u)) > kFacingAlong) continue;
     if (near_high) high.push_back(v);
     if (near_low) low.push_back(v);
   }
