@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 #include "analysis/core/kdtree.hpp"
@@ -217,6 +218,14 @@ Expected<FieldCoverage> add_deformation(const PartModel& model, const KdTree& mo
     report.add_warnings("deformation field: " + std::to_string(field.seen_from_far_side) +
                         " of them are seen from the other side of the sheet only (the scan's "
                         "normals point into the material there)");
+  for (const Vec3& d : field.translations_from_fit) {
+    char direction[64];
+    std::snprintf(direction, sizeof direction, "(%.3f %.3f %.3f)", d.x(), d.y(), d.z());
+    report.add_warnings(std::string("deformation field: its translation along ") + direction +
+                        " (CAD frame) is not measured: no fitted flange faces along it and the "
+                        "scan does not show the sheet's edges across it consistently; the "
+                        "vectors' component along it is the alignment's placement of the part");
+  }
   if (field.unmeasured_motion > 0)
     report.add_warnings("deformation field: " + std::to_string(field.unmeasured_motion) +
                         " of them are scanned, but their flange or bend moves through an "

@@ -84,6 +84,9 @@ struct DeformationField {
   /// refined: of `uncovered`, those the scan covers but whose material's motion rests on an
   /// unmeasured bend (part_motion.hpp motion_measured): the scan fixes the normal component only
   std::size_t unmeasured_motion = 0;
+  /// refined: translations (CAD frame, unit) that neither a fitted flange's plane nor the scan's
+  /// sheet edges measure; the field's component along them is the best fit's placement
+  std::vector<Vec3> translations_from_fit;
   double scan_coverage = 0.0;    ///< refined: share of model points with a vector
   double residual_rms_mm = 0.0;  ///< refined: rms of the supporting scan points' normal
                                  ///< distance to the refined field's surface

@@ -228,7 +228,10 @@ FieldPrediction predict_field(const DeformationField& raw, const FieldRefinement
   // The directions no flange plane fixes: where the scan's sheet edges are against the CAD's.
   for (const Vec3& d : motion.free_translations) {
     const double shift = edge_shift(in.scan_points, in.model_samples, d);
-    if (!std::isfinite(shift)) continue;
+    if (!std::isfinite(shift)) {
+      out.translations_from_fit.push_back(d);
+      continue;
+    }
     for (Transform& T : motion.flange) T.pretranslate(shift * d);
   }
   std::vector<bool> known(n, false);

@@ -16,6 +16,9 @@ struct FieldPrediction {
   std::vector<bool> guessed;      ///< the motion rests on an unmeasured bend (motion_measured)
   std::vector<Vec3> curvature;    ///< other faces: (a, b, c) of the CAD surface's height
                                   ///< h = (a x^2 + 2 b x y + c y^2) / 2 over the tangent plane
+  /// Translations no fitted flange plane fixes that the sheet's edges did not measure either:
+  /// along them the field keeps the best fit's value (DeformationField::translations_from_fit)
+  std::vector<Vec3> translations_from_fit;
 };
 
 /// The tangent basis of a normal in which FieldPrediction::curvature is given.

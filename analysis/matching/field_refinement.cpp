@@ -316,6 +316,7 @@ DeformationField refine_field(const DeformationField& raw, const FieldRefinement
   const std::size_t n = in.model_points.size();
   if (n == 0 || in.model_normals.size() != n || in.model_faces.size() != n) return out;
   const FieldPrediction pred = predict_field(raw, in);
+  out.translations_from_fit = pred.translations_from_fit;
   std::vector<Vec3> centers(n);
   for (std::size_t i = 0; i < n; ++i) centers[i] = pred.motion[i] * in.model_points[i];
   const double reach = std::hypot(s.support_radius_mm, s.normal_window_mm);
