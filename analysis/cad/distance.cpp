@@ -5,9 +5,9 @@
 #include <Standard_Failure.hxx>
 #include <algorithm>
 #include <limits>
-#include <thread>
 
 #include "analysis/cad/distance_internal.hpp"
+#include "analysis/core/parallel.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -136,18 +136,9 @@ std::shared_ptr<const SurfaceDistance> make_cad_distance(const CadShape& shape,
 std::vector<SurfaceHit> closest_all(const SurfaceDistance& distance,
                                     const std::vector<Vec3>& points, int threads) {
   std::vector<SurfaceHit> hits(points.size());
-  const std::size_t n = points.size();
-  std::size_t workers = threads > 0 ? static_cast<std::size_t>(threads)
-                                    : std::max(1u, std::thread::hardware_concurrency());
-  workers = std::min(workers, std::max<std::size_t>(1, n / 256));
-  const auto run = [&](std::size_t begin, std::size_t end) {
+  parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) hits[i] = distance.closest(points[i]);
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t w = 1; w < workers; ++w)
-    pool.emplace_back(run, n * w / workers, n * (w + 1) / workers);
-  run(0, n / workers);
-  for (auto& t : pool) t.join();
+  });
   return hits;
 }
 

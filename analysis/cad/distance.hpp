@@ -33,8 +33,9 @@ struct CadDistanceSettings {
 std::shared_ptr<const SurfaceDistance> make_cad_distance(const CadShape& shape,
                                                          const CadDistanceSettings& settings = {});
 
-/// closest() of every point, on `threads` threads (0 = hardware concurrency). Each thread fills
-/// its own contiguous slice, so the result does not depend on the thread count.
+/// closest() of every point, on `threads` threads (0 = hardware concurrency), in the point
+/// loops' blocks (core/parallel.hpp). Each point's hit is its own, so the result does not depend
+/// on the thread count.
 std::vector<SurfaceHit> closest_all(const SurfaceDistance& distance,
                                     const std::vector<Vec3>& points, int threads = 0);
 

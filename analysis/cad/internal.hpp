@@ -6,8 +6,8 @@
 // Threads and OpenCASCADE. OCCT 7.6 objects are safe to share between threads only while nothing
 // writes them, and some write themselves inside const queries. Audited: every parallel loop that
 // reaches OpenCASCADE does so through SurfaceDistance::closest (CadDistance, cad/distance.cpp):
-// signed_deviation (deviation/deviation.cpp, parallel_blocks), closest_all (cad/distance.cpp, a
-// slice per thread) and the exact-surface pairs of the local fits (springback/local_fit.cpp
+// signed_deviation (deviation/deviation.cpp, parallel_blocks), closest_all (cad/distance.cpp,
+// parallel_blocks) and the exact-surface pairs of the local fits (springback/local_fit.cpp
 // find_pair, for_each_block). inspection/pipeline.cpp only composes these stages. Import, meshing,
 // sampling (cad/sampling.cpp), segmentation (cad/segmentation*.cpp), the model cache
 // (cad/model.cpp) and the test parts' profile solids (simulators/parts/cad_profile.cpp) run on
