@@ -46,8 +46,13 @@ fi
 # sanitizer builds: g++ 12 reports false -Wmaybe-uninitialized inside libstdc++ (std::regex,
 # std::function) under -fsanitize=thread, and clang's warning set differs from g++'s.
 if [[ "${CI:-}" == true && "$kind" == release ]]; then flags+=(-DSPRINGSCAN_WERROR=ON); fi
-launcher=()
-if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+# ccache, with hits across checkouts (scripts/ccache-launcher.sh says how).
+mapfile -t launcher < <(bash "$root/scripts/ccache-launcher.sh")
+# A tree configured before the launcher carried base_dir is configured again (same options).
+if [[ -f "$dir/CMakeCache.txt" && ${#launcher[@]} -gt 0 ]] &&
+   ! grep -qF "${launcher[0]#*=}" "$dir/CMakeCache.txt"; then
+  cmake "$dir" "${launcher[@]}" >/dev/null
+fi
 if [[ ! -f "$dir/CMakeCache.txt" ]]; then
   # The Release build (README's test command, CI) uses CMake's default generator, so the plain
   # `cmake -S . -B build && cmake --build build` a newcomer types is the build CI proves; the

@@ -10,8 +10,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 dir=${1:-$root/build-pkg}
 command -v dpkg-shlibdeps >/dev/null || { echo "package: dpkg-shlibdeps missing (dpkg-dev)" >&2; exit 2; }
-launcher=()
-if command -v ccache >/dev/null; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache); fi
+mapfile -t launcher < <(bash "$root/scripts/ccache-launcher.sh")
 generator=()
 if [[ ! -f "$dir/CMakeCache.txt" ]] && command -v ninja >/dev/null; then generator=(-G Ninja); fi
 # The package's paths (/usr, /etc, /lib); install (and so cpack) builds only what it installs.
