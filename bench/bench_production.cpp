@@ -16,6 +16,7 @@
 #include "bench/inspection_loop.hpp"
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/produced_part.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace {
 
@@ -61,7 +62,7 @@ const Data& data() {
   static const Data d = [] {
     Data out;
     const std::string path =
-        std::string(SPRINGSCAN_SHARED_DIR) + "/data/cad/openamr-MMP.00.00.00.003_Side_panel.step";
+        springscan::test_paths::shared_cad("openamr-MMP.00.00.00.003_Side_panel.step");
     auto cad = parts::load_cad_part(path);
     auto model = load_part_model(path);
     if (!cad || !model) {

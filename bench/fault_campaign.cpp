@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "bench/fault_campaign_internal.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::bench {
 
@@ -202,8 +203,9 @@ void write_config(const CampaignSettings& s, const CampaignPaths& p) {
                           << "  plc_heartbeat_timeout_s: " << s.plc_heartbeat_timeout_s << " }\n"
                           << "scanner { kind: LASER_LINE timeout_s: " << s.scanner_timeout_s
                           << " }\n"
-                             "parts { part_id: 1 cad_file: \"" SPRINGSCAN_SOURCE_DIR
-                             "/demo/hat-profile.step\"\n  settings { verdict { tolerance_mm: 0.5 "
+                             "parts { part_id: 1 cad_file: \""
+                          << springscan::test_paths::source("demo/hat-profile.step")
+                          << "\"\n  settings { verdict { tolerance_mm: 0.5 "
                              "angle_tolerance_deg: 2.0 } } }\n"
                           << "report_dir: \"" << p.reports << "\"\nmodel_cache_dir: \"" << p.dir
                           << "/cache\"\nreport_retention: 20\nlog_level: \"info\"\n";
@@ -222,7 +224,7 @@ int run_fault_campaign(const CampaignSettings& settings) {
                                     settings.points_per_profile, settings.scan_s);
   if (!emulator) return 1;
   write_config(settings, paths);
-  SupervisorSettings supervised{SPRINGSCAND_EXE,
+  SupervisorSettings supervised{springscan::test_paths::kSpringscand,
                                 paths.config,
                                 paths.dir,
                                 paths.log,

@@ -16,6 +16,7 @@
 #include "simulators/parts/produced_part.hpp"
 #include "simulators/parts/sheet_part.hpp"
 #include "tests/analysis/synthetic.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace {
 
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
   }
   for (const char* file : {"openamr-MMP.03.00.00.003_Motor_bracket.step",
                            "openamr-MMP.01.00.00.002_Cover_flange.step"}) {
-    auto loaded = parts::load_cad_part(std::string(SPRINGSCAN_SHARED_DIR) + "/data/cad/" + file);
+    auto loaded = parts::load_cad_part(springscan::test_paths::shared_cad(file));
     if (!loaded) return std::fprintf(stderr, "%s: %s\n", file, loaded.message().c_str()), 1;
     const std::vector<double> sb(loaded->model.segmentation.bends.size(), 0.0);
     auto part = parts::make_produced_part(loaded->model, loaded->shape, sb);

@@ -33,6 +33,7 @@
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
 #include "tests/daemon/daemon_process.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace {
 
@@ -127,15 +128,17 @@ int main(int argc, char** argv) {
   const std::string reports = (dir / "reports").string();
   std::ofstream(config) << "modbus { bind_address: \"127.0.0.1\" port: 0 }\n"
                            "scanner { kind: LASER_LINE timeout_s: 30 }\n"
-                           "parts { part_id: 1 cad_file: \"" SPRINGSCAN_SOURCE_DIR
-                           "/demo/hat-profile.step\"\n  settings { verdict { tolerance_mm: 0.5 "
+                           "parts { part_id: 1 cad_file: \""
+                        << springscan::test_paths::source("demo/hat-profile.step")
+                        << "\"\n  settings { verdict { tolerance_mm: 0.5 "
                            "angle_tolerance_deg: 2.0 } } }\n"
                         << "report_dir: \"" << reports << "\"\nmodel_cache_dir: \""
                         << (dir / "cache").string()
                         << "\"\nreport_retention: 5\nlog_level: \"error\"\n";
   int result = 0;
   {
-    daemon::testing::DaemonProcess station(SPRINGSCAND_EXE, config, dir.string(),
+    daemon::testing::DaemonProcess station(springscan::test_paths::kSpringscand, config,
+                                           dir.string(),
                                            {"LD_PRELOAD=" + simulators::umockdev_preload_library(),
                                             "UMOCKDEV_DIR=" + emulator->root_dir()});
     simulators::PlcClientSettings settings;

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <string>
 
+#include "tests/support/test_paths.hpp"
+
 namespace springscan::analysis::testing {
 
 /// A fresh folder under the system temp dir, named after the running test, removed at exit.
@@ -31,7 +33,7 @@ class TempDir {
 };
 
 inline std::string shared_cad(const std::string& name) {
-  return std::string(SPRINGSCAN_SHARED_DIR) + "/data/cad/" + name;
+  return springscan::test_paths::shared_cad(name);
 }
 
 }  // namespace springscan::analysis::testing

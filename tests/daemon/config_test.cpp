@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "test_rig.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::daemon {
 namespace {
@@ -224,7 +225,7 @@ TEST_F(ConfigTest, MissingFileIsAnError) {
 
 TEST_F(ConfigTest, ShippedConfigParses) {
   // The shipped file names production CAD paths; point them at the test part.
-  std::ifstream in(std::string(SPRINGSCAN_SOURCE_DIR) + "/config/springscand.textproto");
+  std::ifstream in(springscan::test_paths::source("config/springscand.textproto"));
   ASSERT_TRUE(in.good());
   std::stringstream text;
   text << in.rdbuf();

@@ -14,6 +14,7 @@
 #include "analysis/io/file_io.hpp"
 #include "hil_rig.hpp"
 #include "mqtt_rig.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::daemon {
 namespace {
@@ -36,7 +37,7 @@ class HilMqttTest : public HilTest {
         << " retry_max_s: 1 " << extra << "}\n";
   }
   std::string subscriber_script() const {
-    return SPRINGSCAN_SOURCE_DIR "/tests/daemon/mqtt_subscriber.py";
+    return springscan::test_paths::source("tests/daemon/mqtt_subscriber.py");
   }
   std::string broker_dir(const std::string& name) const {
     const std::string d = dir_.str() + "/" + name;
@@ -256,16 +257,16 @@ TEST_F(HilMqttTest, ResultsGoOverTlsToABrokerWithACertificateFromTheTestCa) {
 
 TEST_F(HilMqttTest, CheckValidatesTheMqttSection) {
   add_mqtt(1883, "ca_file: \"/nonexistent/ca.crt\" ");
-  auto [status, output] =
-      testing::run_command(std::string(SPRINGSCAND_EXE) + " --check --config " + config_path());
+  auto [status, output] = testing::run_command(std::string(springscan::test_paths::kSpringscand) +
+                                               " --check --config " + config_path());
   EXPECT_NE(status, 0) << output;
   EXPECT_NE(output.find("mqtt.ca_file: '/nonexistent/ca.crt' is not a readable file"),
             std::string::npos)
       << output;
   write_config({});
   add_mqtt(1883);
-  std::tie(status, output) =
-      testing::run_command(std::string(SPRINGSCAND_EXE) + " --check --config " + config_path());
+  std::tie(status, output) = testing::run_command(
+      std::string(springscan::test_paths::kSpringscand) + " --check --config " + config_path());
   EXPECT_EQ(status, 0) << output;
 }
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "hil_rig.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::daemon {
 namespace {
@@ -34,13 +35,15 @@ std::vector<Collected> collected(const std::string& output) {
 }
 
 TEST_F(HilTest, PymodbusClientWrittenFromTheDocRunsTheWholeHandshake) {
-  if (testing::run_command(SPRINGSCAN_PYMODBUS_PYTHON " -c 'import pymodbus'").first != 0) {
+  if (testing::run_command(std::string(springscan::test_paths::kPython3) + " -c 'import pymodbus'")
+          .first != 0) {
     GTEST_SKIP() << "python3-pymodbus is not installed (scripts/install-deps.sh)";
   }
   emulate(testing::kGoodSpringback);
   auto daemon = start_daemon();
   const auto [status, output] = testing::run_command(
-      SPRINGSCAN_PYMODBUS_PYTHON " " SPRINGSCAN_SOURCE_DIR "/tests/daemon/pymodbus_plc.py --port " +
+      std::string(springscan::test_paths::kPython3) + " " +
+      springscan::test_paths::source("tests/daemon/pymodbus_plc.py") + " --port " +
       std::to_string(daemon->port()) + " --cycles 2 --job 300 --part 1");
   ASSERT_EQ(status, 0) << output;
   EXPECT_NE(output.find("\nOK"), std::string::npos) << output;

@@ -32,6 +32,7 @@
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
 #include "test_rig.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::daemon::testing {
 using namespace springscan::parts;  // test and demo parts (simulators/parts)
@@ -67,8 +68,9 @@ class HilTest : public ::testing::Test {
     std::ofstream(config_path())
         << "modbus { bind_address: \"127.0.0.1\" port: 0 allowed_clients: \"" << c.allowed_client
         << "\" }\nscanner { kind: LASER_LINE timeout_s: " << c.scan_timeout_s << " }\n"
-        << "parts { part_id: 1 name: \"demo hat profile\" cad_file: \"" SPRINGSCAN_SOURCE_DIR
-           "/demo/hat-profile.step\"\n  settings { verdict { tolerance_mm: 0.5 "
+        << "parts { part_id: 1 name: \"demo hat profile\" cad_file: \""
+        << springscan::test_paths::source("demo/hat-profile.step")
+        << "\"\n  settings { verdict { tolerance_mm: 0.5 "
            "angle_tolerance_deg: "
         << c.angle_tolerance_deg << " } } }\n"
         << "report_dir: \"" << reports() << "\"\nmodel_cache_dir: \"" << dir_.str()
@@ -103,7 +105,7 @@ class HilTest : public ::testing::Test {
     if (const char* old = std::getenv("ASAN_OPTIONS"); old != nullptr && *old != '\0')
       asan = std::string(old) + ":" + asan;
     return std::make_unique<DaemonProcess>(
-        SPRINGSCAND_EXE, config_path(), dir_.str(),
+        springscan::test_paths::kSpringscand, config_path(), dir_.str(),
         std::vector<std::string>{"LD_PRELOAD=" + daemon_preload(),
                                  "UMOCKDEV_DIR=" + emulator_->root_dir(), "ASAN_OPTIONS=" + asan});
   }

@@ -26,6 +26,8 @@
 #include <thread>
 #include <vector>
 
+#include "tests/support/test_paths.hpp"
+
 extern char** environ;
 
 namespace springscan::daemon::testing {
@@ -189,8 +191,13 @@ class PahoSubscriber {
                  const std::string& prefix, const std::vector<std::string>& extra = {}) {
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0) throw std::runtime_error("pipe");
-    std::vector<std::string> argv = {SPRINGSCAN_PYTHON3,   "-u",       script, "--port",
-                                     std::to_string(port), "--prefix", prefix};
+    std::vector<std::string> argv = {springscan::test_paths::kPython3,
+                                     "-u",
+                                     script,
+                                     "--port",
+                                     std::to_string(port),
+                                     "--prefix",
+                                     prefix};
     argv.insert(argv.end(), extra.begin(), extra.end());
     pid_ = spawn(argv, dir + "/subscriber.log", fds[1]);
     ::close(fds[1]);

@@ -14,6 +14,7 @@
 #include "daemon/register_map.hpp"
 #include "mqtt_rig.hpp"
 #include "test_rig.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::daemon {
 namespace {
@@ -43,8 +44,8 @@ TEST(ResultPublisherTest, BacklogWhileTheBrokerIsDownIsPublishedInOrderWhenItCom
   ASSERT_TRUE(store.ok()) << store.message();
   std::filesystem::create_directories(dir.str() + "/broker");
   testing::MosquittoBroker broker(dir.str() + "/broker", /*persistent=*/true);
-  PahoSubscriber subscriber(SPRINGSCAN_SOURCE_DIR "/tests/daemon/mqtt_subscriber.py", dir.str(),
-                            broker.port(), "springscan/v1");
+  PahoSubscriber subscriber(springscan::test_paths::source("tests/daemon/mqtt_subscriber.py"),
+                            dir.str(), broker.port(), "springscan/v1");
   ASSERT_TRUE(subscriber.wait_for(
       [](const auto& m) { return PahoSubscriber::count_events(m, "subscribed") >= 1; }, 30.0));
   broker.stop();

@@ -10,6 +10,7 @@
 
 #include "analysis/io/point_io.hpp"
 #include "simulators/parts/sheet_part.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan {
 namespace {
@@ -21,8 +22,9 @@ int run(const std::string& command) {
 
 std::string sim_and_scan(const std::string& sim_flags, const std::string& scan_flags,
                          const std::string& out) {
-  return std::string(SPRINGSCAN_SIM_EXE) + " --serial SN-HIL " + sim_flags + " -- " +
-         SPRINGSCAN_CLI_EXE + " scan --quiet --serial SN-HIL --out " + out + " " + scan_flags;
+  return std::string(springscan::test_paths::kScannerSim) + " --serial SN-HIL " + sim_flags +
+         " -- " + springscan::test_paths::kSpringscan + " scan --quiet --serial SN-HIL --out " +
+         out + " " + scan_flags;
 }
 
 TEST(ScannerSimProcess, CliLaserScanThroughTheEmulatedDeviceMatchesThePart) {
@@ -45,14 +47,14 @@ TEST(ScannerSimProcess, CliLaserScanThroughTheEmulatedDeviceMatchesThePart) {
 
 TEST(ScannerSimProcess, UnplugReachesTheCliAsAFailureAndTheDeviceComesBack) {
   const std::string out = ::testing::TempDir() + "sim_process_tactile.ply";
-  const std::string cli =
-      std::string(SPRINGSCAN_CLI_EXE) + " scan --quiet --kind tactile --serial SN-HIL --out " + out;
+  const std::string cli = std::string(springscan::test_paths::kSpringscan) +
+                          " scan --quiet --kind tactile --serial SN-HIL --out " + out;
   // First scan: unplugged half way (exit 1); the simulator plugs the device back 0.5 s later,
   // once the first process has surely ended (a process that closes its udev monitor while a
   // uevent is in flight makes Debian 12's umockdev abort the simulator: usb_emulator_internal.hpp);
   // the second scan, a new process, finds it again.
   const std::string script = "sh -c '" + cli + "; test $? -eq 1 || exit 9; sleep 1; " + cli + "'";
-  EXPECT_EQ(run(std::string(SPRINGSCAN_SIM_EXE) +
+  EXPECT_EQ(run(std::string(springscan::test_paths::kScannerSim) +
                 " --serial SN-HIL --kind tactile --duration 0.4 --unplug-at 0.5 "
                 "--replug-after 0.5 -- " +
                 script),
@@ -61,8 +63,8 @@ TEST(ScannerSimProcess, UnplugReachesTheCliAsAFailureAndTheDeviceComesBack) {
 }
 
 TEST(ScannerSimProcess, BadOptionsAreRefusedWithAReason) {
-  EXPECT_EQ(run(std::string(SPRINGSCAN_SIM_EXE) + " --kind sonar 2>/dev/null"), 2);
-  EXPECT_EQ(run(std::string(SPRINGSCAN_SIM_EXE) + " --noise abc 2>/dev/null"), 2);
+  EXPECT_EQ(run(std::string(springscan::test_paths::kScannerSim) + " --kind sonar 2>/dev/null"), 2);
+  EXPECT_EQ(run(std::string(springscan::test_paths::kScannerSim) + " --noise abc 2>/dev/null"), 2);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 
 #include "analysis/io/point_io.hpp"
 #include "tests/report/report_fixture.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::report {
 namespace {
@@ -36,8 +37,8 @@ class CliReport : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   // Runs the CLI with `arguments`; returns its exit code, stderr in err_.
   int run(const std::string& arguments) {
-    const std::string command = std::string(SPRINGSCAN_CLI) + " report " + arguments + " 2> " +
-                                (dir_ / "stderr.txt").string();
+    const std::string command = std::string(springscan::test_paths::kSpringscan) + " report " +
+                                arguments + " 2> " + (dir_ / "stderr.txt").string();
     const int status = std::system(command.c_str());
     err_ = slurp(dir_ / "stderr.txt");
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;

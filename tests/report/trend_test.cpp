@@ -16,6 +16,7 @@
 #include <sstream>
 
 #include "report/trend_html.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::report {
 namespace {
@@ -280,8 +281,9 @@ TEST_F(TrendFiles, PageHasTheTableAndOneChartPairPerCharacteristic) {
 
 TEST_F(TrendFiles, CliWritesThePage) {
   const fs::path out = dir_ / "trend.html";
-  const std::string command = std::string(SPRINGSCAN_CLI) + " trend " + (dir_ / "store").string() +
-                              " --out " + out.string() + " 2> " + (dir_ / "err.txt").string();
+  const std::string command = std::string(springscan::test_paths::kSpringscan) + " trend " +
+                              (dir_ / "store").string() + " --out " + out.string() + " 2> " +
+                              (dir_ / "err.txt").string();
   const int status = std::system(command.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0);
@@ -293,8 +295,8 @@ TEST_F(TrendFiles, CliWritesThePage) {
   std::stringstream err;
   err << err_in.rdbuf();
   EXPECT_NE(err.str().find("skipped"), std::string::npos) << err.str();
-  const std::string bad = std::string(SPRINGSCAN_CLI) + " trend " + (dir_ / "absent").string() +
-                          " --out " + out.string() + " 2> /dev/null";
+  const std::string bad = std::string(springscan::test_paths::kSpringscan) + " trend " +
+                          (dir_ / "absent").string() + " --out " + out.string() + " 2> /dev/null";
   const int bad_status = std::system(bad.c_str());
   EXPECT_EQ(WEXITSTATUS(bad_status), 2);
 }

@@ -6,10 +6,12 @@
 #include <filesystem>
 #include <random>
 
+#include "tests/support/test_paths.hpp"
+
 namespace springscan::analysis {
 namespace {
 
-const std::string kData = SPRINGSCAN_TEST_DATA_DIR;
+const std::string kData = springscan::test_paths::source("tests/data");
 
 // A cloud with every attribute, and a few triangles over its points; fixed seed.
 Surface random_surface(std::size_t n, std::uint32_t seed) {
