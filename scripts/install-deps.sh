@@ -15,14 +15,15 @@ packages=(
   libusb-1.0-0-dev libmodbus-dev libsystemd-dev libmosquitto-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
+)
+# The rest is for the tests, CI and benchmarks; the demo (scripts/demo.sh) goes without it.
+if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
   # scripts/package.sh and package-check.sh: dpkg-shlibdeps for CPack's DEB generator,
   # systemd-analyze verify, adduser for the package's postinst.
-  dpkg-dev systemd adduser
-  # CI's format check, and the fuzz build (clang with libFuzzer's runtime).
-  clang-format clang libclang-rt-14-dev
-)
-# Reference implementations and third-party peers used by tests and benchmarks.
-if [[ "${SPRINGSCAN_WITH_EXTRAS:-1}" == 1 ]]; then
+  packages+=(dpkg-dev systemd adduser)
+  # CI's format check, and the sanitizer and fuzz build (clang with libFuzzer's runtime).
+  packages+=(clang-format clang libclang-rt-14-dev)
+  # Reference implementations and third-party peers used by tests and benchmarks.
   packages+=(mbpoll python3-scipy python3-numpy)
   # The third-party PLC client test (tests/daemon/pymodbus_plc.py): Debian 12's pymodbus 3.0.
   # Its client imports serial_asyncio, which Debian only recommends (we install without them).

@@ -23,6 +23,15 @@ case "$kind" in
         select=(-L '^(analysis|daemon)$' -E "$sweeps") ;;
   *) dir="$root/build" ;;
 esac
+# CTest starts the tests it knows to be long first, from the cost data of the tree's earlier
+# runs. A fresh clone has none, so it starts from the costs committed in tests/ctest-costs/
+# (copied from a run's Testing/Temporary/CTestCostData.txt): a long test no longer starts last
+# and runs alone on one core at the end.
+costs="$dir/Testing/Temporary/CTestCostData.txt"
+if [[ ! -f "$costs" && -f "$root/tests/ctest-costs/$kind.txt" ]]; then
+  mkdir -p "$(dirname "$costs")"
+  cp "$root/tests/ctest-costs/$kind.txt" "$costs"
+fi
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
