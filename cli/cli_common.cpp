@@ -97,10 +97,9 @@ ArgParser::Outcome ArgParser::parse(int argc, char** argv, int first) {
       }
       values_.insert_or_assign(name,
                                std::string(1, '1'));  // not ="1": g++ 12 -Wrestrict false positive
-    } else if (inline_value) {
-      values_[name] = *inline_value;
-    } else if (i + 1 < argc) {
-      values_[name] = argv[++i];
+    } else if (inline_value || i + 1 < argc) {
+      values_[name] = inline_value ? *inline_value : argv[++i];
+      all_values_[name].push_back(values_[name]);
     } else {
       error_ = "option --" + name + " needs a value (" + spec->second.value_name + ")";
       return Outcome::kUsageError;
@@ -130,6 +129,11 @@ std::string ArgParser::help() const {
     out << left << spec.help << '\n';
   }
   return out.str();
+}
+
+std::vector<std::string> ArgParser::get_all(const std::string& name) const {
+  const auto found = all_values_.find(name);
+  return found == all_values_.end() ? std::vector<std::string>{} : found->second;
 }
 
 std::string ArgParser::get(const std::string& name, const std::string& fallback) const {

@@ -57,6 +57,8 @@ class ArgParser {
   const std::string& error() const { return error_; }
   bool has(const std::string& name) const { return values_.count(name) != 0; }
   std::string get(const std::string& name, const std::string& fallback = "") const;
+  /// Every value an option was given, in order (`--scan A --scan B`); get() has the last.
+  std::vector<std::string> get_all(const std::string& name) const;
   /// The option as a number; a usage error (in error()) when it is present but not a number.
   std::optional<double> get_number(const std::string& name);
   const std::vector<std::string>& positionals() const { return positionals_; }
@@ -78,6 +80,7 @@ class ArgParser {
   std::vector<std::string> order_;
   std::map<std::string, Spec> specs_;
   std::map<std::string, std::string> values_;
+  std::map<std::string, std::vector<std::string>> all_values_;
   std::vector<std::string> positionals_;
 };
 

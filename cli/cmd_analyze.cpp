@@ -156,6 +156,7 @@ int analyze_main(int argc, char** argv) {
   args.add_option("settings", "FILE", "AnalysisSettings in protobuf text format");
   args.add_option("tolerance", "MM", "surface tolerance (deviation and verdict)");
   args.add_option("angle-tolerance", "DEG", "springback tolerance per bend (verdict)");
+  args.add_option("serial", "S", "the individual part's serial (input.part_serial; msa type3)");
   args.add_switch("decimate",
                   "the scan is a mesh (STL, PLY with faces): reduce it by mesh decimation first "
                   "(reduction.mesh_decimation, docs/decimation.md)");
@@ -212,6 +213,7 @@ int analyze_main(int argc, char** argv) {
   v1::InspectionReport& report = outcome->report;
   report.mutable_input()->set_cad_file(args.get(args.has("cad") ? "cad" : "model"));
   report.mutable_input()->set_scan_file(args.get("scan"));
+  report.mutable_input()->set_part_serial(args.get("serial"));
   auto& timings = *report.mutable_timings_ms();
   timings.set_load(load_ms);
   timings.set_model(model_ms);

@@ -17,6 +17,7 @@ int convert_main(int argc, char** argv);
 int analyze_main(int argc, char** argv);
 int model_main(int argc, char** argv);
 int trend_main(int argc, char** argv);
+int msa_main(int argc, char** argv);
 
 namespace {
 
@@ -29,6 +30,7 @@ const Command kCommands[] = {
     {"scan", "acquire one scan from the configured USB scanner", scan_main},
     {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", convert_main},
     {"trend", "control charts, Cp/Cpk and run rules over many reports (HTML)", trend_main},
+    {"msa", "gauge capability studies, type 1 (Cg, Cgk) and type 3 (%GRR, ndc)", msa_main},
 };
 
 void print_usage() {

@@ -220,6 +220,7 @@ analysis::Expected<TrendInput> read_reports(const std::vector<std::string>& path
         kept.set_result_seq(full->result_seq());
         kept.set_result_code(full->result_code());
         kept.mutable_input()->set_part_id(full->input().part_id());
+        kept.mutable_input()->set_part_serial(full->input().part_serial());  // msa type 3
         *kept.mutable_bends() = full->bends();
         if (full->has_deviation()) *kept.mutable_deviation() = full->deviation();
         if (full->has_verdict()) *kept.mutable_verdict() = full->verdict();

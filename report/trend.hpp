@@ -72,7 +72,8 @@ std::vector<Characteristic> collect_characteristics(
 
 struct TrendInput {
   /// Ordered by created_utc, then path. Only what the trend uses is kept: schema, created_utc,
-  /// station, job_id, result_seq, result_code, input.part_id, bends, deviation, verdict.
+  /// station, job_id, result_seq, result_code, input.part_id and part_serial, bends, deviation,
+  /// verdict.
   std::vector<v1::InspectionReport> reports;
   std::vector<std::string> skipped;  ///< "path: reason" for files that were not reports
 };

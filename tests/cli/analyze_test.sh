@@ -32,11 +32,13 @@ assert re.fullmatch(r"\d+\.\d+\.\d+", report["software_version"]), report["softw
 assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ", report["created_utc"]), report["created_utc"]
 PY
 
-# --quiet: nothing on stdout, the files all the same.
+# --quiet: nothing on stdout, the files all the same; --serial lands in input.part_serial (the
+# type-3 gauge study groups by it, issue 42).
 "$bin" analyze --cad "$demo/hat-profile.step" --scan "$demo/hat-profile-scan.ply" \
-  --out "$tmp/quiet" --quiet >"$tmp/quiet.stdout"
+  --out "$tmp/quiet" --quiet --serial "HAT-0042" >"$tmp/quiet.stdout"
 check 'test ! -s "$tmp/quiet.stdout"'
 check 'test -s "$tmp/quiet/report.json"'
+check 'grep -q "\"part_serial\": \"HAT-0042\"" "$tmp/quiet/report.json"'
 
 # A PLY cut short: exit 2, one line naming the file, nothing written.
 head -c 3000 "$demo/hat-profile-scan.ply" >"$tmp/cut.ply"
