@@ -25,8 +25,7 @@ void print_type1(const v1::MsaType1Study& study) {
   for (const auto& c : study.characteristics())
     std::printf("%s: n %d, mean %.5f, s %.5f, bias %+.5f (p %.3f), Cg %s, Cgk %s: %s\n",
                 c.name().c_str(), c.n(), c.mean(), c.stddev(), c.bias(), c.bias_p(),
-                figure(c.has_cg(), c.cg()).c_str(),
-                figure(c.has_cgk(), c.cgk()).c_str(),
+                figure(c.has_cg(), c.cg()).c_str(), figure(c.has_cgk(), c.cgk()).c_str(),
                 c.capable() ? "capable" : "NOT capable");
   std::printf("type 1: %s\n", study.capable() ? "capable" : "NOT capable");
 }
@@ -70,17 +69,18 @@ int write_outputs(const ArgParser& args, const std::string& html,
 }  // namespace
 
 int msa_main(int argc, char** argv) {
-  ArgParser args(kName,
-                 "type1 REPORTS... --reference REF.json --out msa.html [--json msa.json]\n"
-                 "       springscan msa type3 REPORTS... --out msa.html [--json msa.json]",
-                 "Gauge capability studies over report folders (as springscan trend reads them).\n"
-                 "type1: at least 25 reports of one reference part; per characteristic named in\n"
-                 "REF.json ({\"bend 1 springback\": 0.42, ...}) the mean, s, bias and its t-test,\n"
-                 "Cg = 0.2 T / (6 s), Cgk = (0.1 T - |bias|) / (3 s); a run chart and a histogram.\n"
-                 "type3: at least 5 parts x 2 trials, grouped by input.part_serial (analyze\n"
-                 "--serial), balanced; one-way ANOVA: EV, PV, GRR, %GRR of T and of the total\n"
-                 "variation, ndc. T from the reports (2 x the angle tolerance for springback).\n"
-                 "Exit 1, nothing written, when the reports cannot make the study.");
+  ArgParser args(
+      kName,
+      "type1 REPORTS... --reference REF.json --out msa.html [--json msa.json]\n"
+      "       springscan msa type3 REPORTS... --out msa.html [--json msa.json]",
+      "Gauge capability studies over report folders (as springscan trend reads them).\n"
+      "type1: at least 25 reports of one reference part; per characteristic named in\n"
+      "REF.json ({\"bend 1 springback\": 0.42, ...}) the mean, s, bias and its t-test,\n"
+      "Cg = 0.2 T / (6 s), Cgk = (0.1 T - |bias|) / (3 s); a run chart and a histogram.\n"
+      "type3: at least 5 parts x 2 trials, grouped by input.part_serial (analyze\n"
+      "--serial), balanced; one-way ANOVA: EV, PV, GRR, %GRR of T and of the total\n"
+      "variation, ndc. T from the reports (2 x the angle tolerance for springback).\n"
+      "Exit 1, nothing written, when the reports cannot make the study.");
   args.add_option("reference", "REF.json", "type1: reference value per characteristic name");
   args.add_option("out", "FILE", "the HTML page (default: msa.html)");
   args.add_option("json", "FILE", "also the figures as JSON");
@@ -91,8 +91,7 @@ int msa_main(int argc, char** argv) {
   if (auto done = args.start(argc, argv, logger)) return *done;
   const auto& positionals = args.positionals();
   if (positionals.empty() || (positionals[0] != "type1" && positionals[0] != "type3"))
-    return fail_with(kName, "expects type1 or type3 first (see springscan msa --help)",
-                     kExitUsage);
+    return fail_with(kName, "expects type1 or type3 first (see springscan msa --help)", kExitUsage);
   const bool type1 = positionals[0] == "type1";
   if (positionals.size() < 2) return fail_with(kName, "expects REPORTS... folders", kExitUsage);
   if (type1 && !args.has("reference"))
@@ -109,8 +108,8 @@ int msa_main(int argc, char** argv) {
     auto text = analysis::read_file_bytes(args.get("reference"));
     if (!text) return fail_with(kName, text.message(), kExitUsage);
     auto references = report::parse_references(*text);
-    if (!references) return fail_with(kName, args.get("reference") + ": " + references.message(),
-                                      kExitUsage);
+    if (!references)
+      return fail_with(kName, args.get("reference") + ": " + references.message(), kExitUsage);
     auto study = report::type1_study(input->reports, *references, *settings);
     if (!study) return fail_with(kName, study.message(), kExitAnalysisFailed);
     if (const int code = write_outputs(args, report::render_type1_html(*study, info), *study))

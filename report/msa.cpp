@@ -77,8 +77,8 @@ std::optional<analysis::Error> check_present(const std::vector<v1::InspectionRep
       return fail("characteristic '" + name + "' is in none of the reports (they have: " + have +
                   ")");
     }
-    return fail("characteristic '" + name + "' is missing in " + std::to_string(missing) +
-                " of " + std::to_string(reports.size()) + " reports (first: " + describe(*first) +
+    return fail("characteristic '" + name + "' is missing in " + std::to_string(missing) + " of " +
+                std::to_string(reports.size()) + " reports (first: " + describe(*first) +
                 "); leave it out with --characteristic, or drop those reports");
   }
   return std::nullopt;

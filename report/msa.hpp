@@ -23,21 +23,21 @@
 namespace springscan::report {
 
 struct MsaSettings {
-  std::size_t min_type1_reports = 25;         ///< VDA 5: at least 25 (better 50) repeats
-  std::size_t min_parts = 5;                  ///< type 3: parts
-  std::size_t min_trials = 2;                 ///< type 3: trials per part
-  std::map<std::string, double> tolerances;   ///< T by characteristic name, over the reports'
-  std::vector<std::string> only;              ///< study only these names (empty: see below)
-  MsaLimits limits;                           ///< the verdicts' limits
+  std::size_t min_type1_reports = 25;        ///< VDA 5: at least 25 (better 50) repeats
+  std::size_t min_parts = 5;                 ///< type 3: parts
+  std::size_t min_trials = 2;                ///< type 3: trials per part
+  std::map<std::string, double> tolerances;  ///< T by characteristic name, over the reports'
+  std::vector<std::string> only;             ///< study only these names (empty: see below)
+  MsaLimits limits;                          ///< the verdicts' limits
 };
 
 /// The type-1 study of `reports` (time order, one part id) for every characteristic named in
 /// `references` (name -> reference value), or those of settings.only. Errors (code
 /// kInvalidInput, nothing partial): fewer than min_type1_reports reports, mixed part ids, a
 /// characteristic missing in some report or absent from `references`.
-analysis::Expected<v1::MsaType1Study> type1_study(
-    const std::vector<v1::InspectionReport>& reports,
-    const std::map<std::string, double>& references, const MsaSettings& settings = {});
+analysis::Expected<v1::MsaType1Study> type1_study(const std::vector<v1::InspectionReport>& reports,
+                                                  const std::map<std::string, double>& references,
+                                                  const MsaSettings& settings = {});
 
 /// The type-3 study of `reports` (time order, one part id), grouped by input.part_serial, for
 /// every characteristic the reports have (or settings.only). Errors: a report without a part

@@ -55,8 +55,8 @@ std::string open_svg(const char* css_class, const std::string& label) {
 std::string axes(const Frame& f, const std::string& value_unit, const std::string& other_caption,
                  bool vertical_values) {
   std::string svg = "<rect x=\"" + num(kLeft) + "\" y=\"" + num(kTop) + "\" width=\"" +
-                    num(kWidth - kLeft - kRight) + "\" height=\"" +
-                    num(kHeight - kTop - kBottom) + "\" fill=\"none\" stroke=\"#c5ccd4\"/>";
+                    num(kWidth - kLeft - kRight) + "\" height=\"" + num(kHeight - kTop - kBottom) +
+                    "\" fill=\"none\" stroke=\"#c5ccd4\"/>";
   for (int k = 0; k <= 4; ++k) {
     if (vertical_values) {
       const double v = f.x0 + (f.x1 - f.x0) * k / 4.0;
@@ -143,8 +143,8 @@ std::string histogram_svg(const std::vector<double>& values, const std::vector<C
     svg += "<rect class=\"bin\" x=\"" + num(f.px(x)) + "\" y=\"" +
            num(f.py(static_cast<double>(count[b]))) + "\" width=\"" +
            num(std::max(1.0, f.px(x + width) - f.px(x) - 1.0)) + "\" height=\"" +
-           num(f.py(0.0) - f.py(static_cast<double>(count[b]))) +
-           "\" fill=\"#8fa9c4\"><title>" + std::to_string(count[b]) + "</title></rect>";
+           num(f.py(0.0) - f.py(static_cast<double>(count[b]))) + "\" fill=\"#8fa9c4\"><title>" +
+           std::to_string(count[b]) + "</title></rect>";
   }
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const ChartLine& l = lines[i];
@@ -175,8 +175,8 @@ std::string parts_chart_svg(const std::vector<double>& values, std::size_t parts
              "\" r=\"2.6\" fill=\"#2b3a4a\" fill-opacity=\"0.7\"/>";
     }
     const double y = f.py(sum / static_cast<double>(trials));
-    svg += "<line x1=\"" + num(x - 8) + "\" x2=\"" + num(x + 8) + "\" y1=\"" + num(y) +
-           "\" y2=\"" + num(y) + "\" stroke=\"#2f6fb5\" stroke-width=\"2\"/>";
+    svg += "<line x1=\"" + num(x - 8) + "\" x2=\"" + num(x + 8) + "\" y1=\"" + num(y) + "\" y2=\"" +
+           num(y) + "\" stroke=\"#2f6fb5\" stroke-width=\"2\"/>";
     if (p != 0) means.push_back(' ');
     means += num(x);
     means.push_back(',');

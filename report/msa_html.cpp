@@ -122,15 +122,15 @@ std::string render_type3_html(const v1::MsaType3Study& study, const MsaPageInfo&
           "<th>%GRR of TV</th><th>ndc</th><th>verdict</th></tr></thead><tbody>\n";
   for (int i = 0; i < study.characteristics_size(); ++i) {
     const v1::MsaType3Characteristic& c = study.characteristics(i);
-    const char* cls = c.acceptable()                                   ? "good"
+    const char* cls = c.acceptable()                                                     ? "good"
                       : c.verdict() == to_string(GrrVerdict::kConditional) && c.ndc_ok() ? "warn"
-                                                                                 : "bad";
+                                                                                         : "bad";
     html += "<tr class=\"characteristic\">" +
             cell("<a href=\"#" + anchor(static_cast<std::size_t>(i)) + "\">" +
                  escape_html(c.name()) + "</a> (" + escape_html(c.unit()) + ")") +
             cell(value_text(c.tolerance())) + cell(std::to_string(c.parts())) +
-            cell(std::to_string(c.trials())) + cell(value_text(c.ev())) +
-            cell(value_text(c.pv())) + cell(value_text(c.grr())) +
+            cell(std::to_string(c.trials())) + cell(value_text(c.ev())) + cell(value_text(c.pv())) +
+            cell(value_text(c.grr())) +
             cell(optional_text(c.has_grr_pct_tolerance(), c.grr_pct_tolerance(), 1), cls) +
             cell(optional_text(c.has_grr_pct_total(), c.grr_pct_total(), 1)) +
             cell(optional_text(c.has_ndc(), c.ndc(), 1), c.ndc_ok() ? "" : "bad") +

@@ -46,8 +46,8 @@ double mean_of(const std::vector<double>& v) {
 double incomplete_beta(double a, double b, double x) {
   if (x <= 0.0) return 0.0;
   if (x >= 1.0) return 1.0;
-  const double log_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) +
-                           a * std::log(x) + b * std::log1p(-x);
+  const double log_front =
+      std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
   const double front = std::exp(log_front);
   // The symmetry I_x(a, b) = 1 - I_{1-x}(b, a) keeps the fraction on its fast side.
   if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_continued_fraction(a, b, x) / a;
@@ -99,9 +99,8 @@ analysis::Expected<Type3Figures> type3_figures(const std::vector<std::vector<dou
   const std::size_t r = by_part.front().size();
   for (std::size_t i = 0; i < by_part.size(); ++i)
     if (by_part[i].size() != r)
-      return analysis::fail("unbalanced study: part 1 has " + std::to_string(r) +
-                            " trials, part " + std::to_string(i + 1) + " has " +
-                            std::to_string(by_part[i].size()));
+      return analysis::fail("unbalanced study: part 1 has " + std::to_string(r) + " trials, part " +
+                            std::to_string(i + 1) + " has " + std::to_string(by_part[i].size()));
   if (r < 2) return analysis::fail("a type-3 study needs at least 2 trials per part");
   Type3Figures f;
   f.parts = by_part.size();

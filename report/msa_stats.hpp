@@ -7,9 +7,9 @@
 //   degrees of freedom; Cg = 0.2 T / (6 s), Cgk = (0.1 T - |bias|) / (3 s).
 // Type 3 (AIAG MSA 4th ed., ANOVA method, with the operator term left out: an automated gauge):
 //   a one-way ANOVA of p parts with r trials each,
-//   MS_parts = r sum_i (mean_i - mean)^2 / (p - 1), MS_within = sum_ij (y_ij - mean_i)^2 / (p (r - 1)),
-//   EV = sqrt(MS_within), PV = sqrt(max(0, (MS_parts - MS_within) / r)), GRR = EV,
-//   %GRR(T) = 100 * 6 GRR / T, %GRR(TV) = 100 GRR / sqrt(GRR^2 + PV^2), ndc = 1.41 PV / GRR.
+//   MS_parts = r sum_i (mean_i - mean)^2 / (p - 1), MS_within = sum_ij (y_ij - mean_i)^2 / (p (r -
+//   1)), EV = sqrt(MS_within), PV = sqrt(max(0, (MS_parts - MS_within) / r)), GRR = EV, %GRR(T) =
+//   100 * 6 GRR / T, %GRR(TV) = 100 GRR / sqrt(GRR^2 + PV^2), ndc = 1.41 PV / GRR.
 //
 // Thread safety: every function is pure.
 
@@ -22,21 +22,21 @@ namespace springscan::report {
 
 /// The usual acceptance limits (VDA 5, AIAG MSA). Defaults are the limits the issue names.
 struct MsaLimits {
-  double min_cg = 1.33;             ///< type 1: Cg at least this
-  double min_cgk = 1.33;            ///< type 1: Cgk at least this
-  double bias_alpha = 0.05;         ///< type 1: bias significant when p < this
-  double max_grr_pct = 10.0;        ///< type 3: %GRR of the tolerance up to this: acceptable
+  double min_cg = 1.33;               ///< type 1: Cg at least this
+  double min_cgk = 1.33;              ///< type 1: Cgk at least this
+  double bias_alpha = 0.05;           ///< type 1: bias significant when p < this
+  double max_grr_pct = 10.0;          ///< type 3: %GRR of the tolerance up to this: acceptable
   double conditional_grr_pct = 30.0;  ///< ... up to this: conditionally acceptable
-  double min_ndc = 5.0;             ///< type 3: number of distinct categories at least this
+  double min_ndc = 5.0;               ///< type 3: number of distinct categories at least this
 };
 
 struct Type1Figures {
   std::size_t n = 0;
   double mean = 0.0;
-  double stddev = 0.0;  ///< s, n - 1 in the denominator
-  double bias = 0.0;    ///< mean - reference
-  double bias_t = 0.0;  ///< 0 when s = 0
-  double bias_p = 1.0;  ///< two-sided p of the bias t-test
+  double stddev = 0.0;        ///< s, n - 1 in the denominator
+  double bias = 0.0;          ///< mean - reference
+  double bias_t = 0.0;        ///< 0 when s = 0
+  double bias_p = 1.0;        ///< two-sided p of the bias t-test
   std::optional<double> cg;   ///< needs T > 0 and s > 0
   std::optional<double> cgk;  ///< needs T > 0 and s > 0
 };

@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "report/msa_html.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::report {
 namespace {
@@ -158,8 +159,8 @@ Drawn3 type3_reports(int parts, int trials) {
     for (int i = 0; i < parts; ++i) {
       const double b1 = truth[static_cast<std::size_t>(i)] + repeat(rng);
       d.bend1[static_cast<std::size_t>(i)].push_back(b1);
-      d.reports.push_back(
-          make_report(seq++, std::string("S").append(std::to_string(100 + i)), b1, -0.1 + repeat(rng), 0.1));
+      d.reports.push_back(make_report(seq++, std::string("S").append(std::to_string(100 + i)), b1,
+                                      -0.1 + repeat(rng), 0.1));
     }
   return d;
 }
@@ -279,7 +280,7 @@ class MsaCli : public ::testing::Test {
     }
   }
   int run(const std::string& arguments) {
-    const std::string command = std::string(SPRINGSCAN_CLI) + " msa " + arguments + " > " +
+    const std::string command = std::string(test_paths::kSpringscan) + " msa " + arguments + " > " +
                                 (dir_ / "out.txt").string() + " 2> " + (dir_ / "err.txt").string();
     const int status = std::system(command.c_str());
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -298,9 +299,8 @@ TEST_F(MsaCli, Type1WritesThePageAndTheJson) {
   write_store("store", d.reports);
   std::ofstream(dir_ / "ref.json") << R"({"bend 1 springback": 0.42})";
   const std::string args = "type1 " + (dir_ / "store").string() + " --reference " +
-                           (dir_ / "ref.json").string() + " --out " +
-                           (dir_ / "msa.html").string() + " --json " +
-                           (dir_ / "msa.json").string() +
+                           (dir_ / "ref.json").string() + " --out " + (dir_ / "msa.html").string() +
+                           " --json " + (dir_ / "msa.json").string() +
                            " --tolerance 'bend 1 springback=0.8'";
   ASSERT_EQ(run(args), 0) << read(dir_ / "err.txt");
   v1::MsaType1Study study;
