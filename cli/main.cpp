@@ -18,6 +18,7 @@ int analyze_main(int argc, char** argv);
 int model_main(int argc, char** argv);
 int trend_main(int argc, char** argv);
 int msa_main(int argc, char** argv);
+int calibrate_main(int argc, char** argv);
 
 namespace {
 
@@ -31,6 +32,7 @@ const Command kCommands[] = {
     {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", convert_main},
     {"trend", "control charts, Cp/Cpk and run rules over many reports (HTML)", trend_main},
     {"msa", "gauge capability studies, type 1 (Cg, Cgk) and type 3 (%GRR, ndc)", msa_main},
+    {"calibrate", "fit each scanner head's transform to the calibration artefact", calibrate_main},
 };
 
 void print_usage() {
