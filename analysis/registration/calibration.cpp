@@ -1,10 +1,9 @@
 #include "analysis/registration/calibration.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
+#include <optional>
 
 #include "analysis/core/parallel.hpp"
 
@@ -133,44 +132,13 @@ void normal_equations(const Evaluation& e, const std::vector<Vec3>& raw, const T
   }
 }
 
-std::string vector_text(const Vec3& v) {
-  char text[64];
-  std::snprintf(text, sizeof text, "(%.3f, %.3f, %.3f)", v.x(), v.y(), v.z());
-  return text;
-}
-
-/// The directions whose information is below min_direction_ratio of the strongest: rotations
-/// scaled by the rms radius so that a radian and a millimetre weigh alike at the view's size.
-std::vector<CalibrationFreeDirection> free_directions(const Eigen::MatrixXd& H, const Evaluation& e,
-                                                      const HeadCalibrationSettings& settings,
-                                                      double& weakest) {
+/// The rms distance of the inliers from their centroid: the lever arm that makes a rotation's
+/// information comparable with a translation's.
+double rms_radius(const Evaluation& e) {
   double radius2 = 0.0;
   for (std::size_t i = 0; i < e.station.size(); ++i)
     if (e.inlier[i]) radius2 += (e.station[i] - e.centre).squaredNorm();
-  const double radius =
-      std::sqrt(radius2 / static_cast<double>(std::max<std::size_t>(1, e.inliers)));
-  Eigen::Matrix<double, 6, 6> D = Eigen::Matrix<double, 6, 6>::Identity();
-  D.diagonal().head<3>().setConstant(1.0 / std::max(radius, 1e-9));
-  const Eigen::Matrix<double, 6, 6> Hs = D * H.topLeftCorner<6, 6>() * D;
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(Hs);
-  const double strongest = eig.eigenvalues()[5];
-  weakest = strongest > 0 ? eig.eigenvalues()[0] / strongest : 0.0;
-  std::vector<CalibrationFreeDirection> out;
-  for (int j = 0; j < 6; ++j) {
-    const double ratio = strongest > 0 ? eig.eigenvalues()[j] / strongest : 0.0;
-    if (ratio >= settings.min_direction_ratio) break;
-    const Eigen::Matrix<double, 6, 1> v = eig.eigenvectors().col(j);
-    CalibrationFreeDirection f;
-    f.rotation = v.head<3>().norm() > v.tail<3>().norm();
-    f.axis = (f.rotation ? Vec3(v.head<3>()) : Vec3(v.tail<3>())).normalized();
-    f.centre = e.centre;
-    f.ratio = ratio;
-    f.description =
-        f.rotation ? "rotation about " + vector_text(f.axis) + " through " + vector_text(f.centre)
-                   : "translation along " + vector_text(f.axis);
-    out.push_back(f);
-  }
-  return out;
+  return std::sqrt(radius2 / static_cast<double>(std::max<std::size_t>(1, e.inliers)));
 }
 
 Expected<Transform> initial_pose(const std::vector<Vec3>& points, const PartModel& artefact,
@@ -183,6 +151,76 @@ Expected<Transform> initial_pose(const std::vector<Vec3>& points, const PartMode
   auto fit = global_fit(points, tree, artefact.samples.normals, global);
   if (!fit) return fit.error().prepend("head calibration: first pose: ");
   return fit->T_cad_scan;
+}
+
+std::optional<Error> check_input(const std::vector<Vec3>& head_points, const PartModel& artefact,
+                                 const HeadCalibrationSettings& settings) {
+  if (head_points.size() < kMinPoints)
+    return fail("head calibration: " + std::to_string(head_points.size()) + " points; at least " +
+                std::to_string(kMinPoints) + " needed");
+  for (const Vec3& p : head_points)
+    if (!p.allFinite()) return fail("head calibration: the scan has non-finite points");
+  if (!artefact.distance || artefact.samples.empty())
+    return fail("head calibration: the artefact model needs its exact CAD distance and samples");
+  if (settings.motion_axis < 0 || settings.motion_axis > 2)
+    return fail(ErrorCode::kInvalidSettings,
+                "head calibration: motion_axis = " + std::to_string(settings.motion_axis) +
+                    ": allowed 0, 1 or 2");
+  return validate(settings.icp, "head calibration: icp.");
+}
+
+/// The rigid fit on the exact surface, and with the scale, after each fit one Gauss-Newton step
+/// of all seven parameters at the fitted pose whose scale part is kept (it allows for the scale's
+/// correlation with the pose); the pose is then fitted again. Updates T, scale, out.icp.
+std::optional<Error> fit_rounds(const std::vector<Vec3>& raw, const PartModel& artefact,
+                                const HeadCalibrationSettings& settings, Transform& T,
+                                MotionScale& scale, HeadCalibration& out) {
+  IcpSettings icp_settings = settings.icp;
+  icp_settings.threads = settings.threads;
+  const IcpPairSearch pairs = exact_pairs(*artefact.distance);
+  Eigen::MatrixXd H;
+  Eigen::VectorXd g;
+  for (;;) {
+    auto fit = icp(scaled(raw, scale), pairs, T, icp_settings);
+    if (!fit) return fit.error().prepend("head calibration: ");
+    out.icp = std::move(*fit);
+    T = out.icp.T_target_source;
+    ++out.scale_rounds;
+    if (!settings.fit_motion_scale || out.scale_rounds >= settings.max_scale_rounds) break;
+    const Evaluation e = evaluate(scaled(raw, scale), T, *artefact.distance, settings);
+    normal_equations(e, raw, T, &scale, H, g);
+    const double dk = Eigen::VectorXd(H.ldlt().solve(-g))[6];
+    if (!std::isfinite(dk)) break;
+    scale.k += dk;
+    if (std::abs(dk) < settings.scale_convergence) break;
+  }
+  if (out.icp.converged) return std::nullopt;
+  return fail(ErrorCode::kAnalysisFailed,
+              "head calibration: the fit did not converge (" + out.icp.stop_reason + ")");
+}
+
+Error refusal(const std::vector<CalibrationFreeDirection>& loose) {
+  std::string names;
+  for (const auto& f : loose) names += (names.empty() ? "" : "; ") + f.description;
+  return fail(ErrorCode::kAnalysisFailed,
+              "head calibration: the view leaves " + std::to_string(loose.size()) +
+                  " direction(s) free: " + names +
+                  " (a plane or a profile extruded along the motion does not fix them)");
+}
+
+/// Cov = sigma^2 H^-1, sigma^2 the inliers' residual variance with the fitted parameters'
+/// degrees of freedom taken off (linear least squares, e.g. Bjorck 1996, section 1.1.4).
+void set_uncertainty(const Evaluation& e, const Eigen::MatrixXd& H, HeadCalibration& out) {
+  double sum2 = 0.0;
+  for (std::size_t i = 0; i < e.residual.size(); ++i)
+    if (e.inlier[i]) sum2 += e.residual[i] * e.residual[i];
+  const auto m = static_cast<std::size_t>(H.rows());
+  out.covariance = (sum2 / static_cast<double>(e.inliers - m)) * H.inverse();
+  for (int j = 0; j < 3; ++j) {
+    out.rotation_sigma_deg[j] = std::sqrt(out.covariance(j, j)) * kRadToDeg;
+    out.translation_sigma_mm[j] = std::sqrt(out.covariance(3 + j, 3 + j));
+  }
+  if (m == 7) out.motion_scale_sigma = std::sqrt(out.covariance(6, 6));
 }
 
 }  // namespace
@@ -206,78 +244,30 @@ Expected<HeadCalibration> calibrate_head(const std::vector<Vec3>& head_points,
                                          const PartModel& artefact,
                                          const HeadCalibrationSettings& settings,
                                          std::vector<CalibrationFreeDirection>* free) {
-  if (head_points.size() < kMinPoints)
-    return fail("head calibration: " + std::to_string(head_points.size()) + " points; at least " +
-                std::to_string(kMinPoints) + " needed");
-  for (const Vec3& p : head_points)
-    if (!p.allFinite()) return fail("head calibration: the scan has non-finite points");
-  if (!artefact.distance || artefact.samples.empty())
-    return fail("head calibration: the artefact model needs its exact CAD distance and samples");
-  if (settings.motion_axis < 0 || settings.motion_axis > 2)
-    return fail(ErrorCode::kInvalidSettings,
-                "head calibration: motion_axis = " + std::to_string(settings.motion_axis) +
-                    ": allowed 0, 1 or 2");
-  if (auto bad = validate(settings.icp, "head calibration: icp.")) return *bad;
+  if (auto bad = check_input(head_points, artefact, settings)) return *bad;
+  // Rigid fits and scale steps on an even stride of the points, from the global fit's pose.
   const std::vector<Vec3> raw = strided(head_points, settings.max_points);
   MotionScale scale{settings.motion_axis, 0.0, 1.0};
   for (const Vec3& p : raw) scale.centre += p[scale.axis] / static_cast<double>(raw.size());
   auto start = initial_pose(raw, artefact, settings);
   if (!start) return start.error();
-  Transform T = *start;
-  IcpSettings icp_settings = settings.icp;
-  icp_settings.threads = settings.threads;
-  const IcpPairSearch pairs = exact_pairs(*artefact.distance);
   HeadCalibration out;
-  Eigen::MatrixXd H;
-  Eigen::VectorXd g;
-  for (;;) {
-    auto fit = icp(scaled(raw, scale), pairs, T, icp_settings);
-    if (!fit) return fit.error().prepend("head calibration: ");
-    out.icp = std::move(*fit);
-    T = out.icp.T_target_source;
-    ++out.scale_rounds;
-    if (!settings.fit_motion_scale || out.scale_rounds >= settings.max_scale_rounds) break;
-    // One Gauss-Newton step of all seven parameters at the fitted pose; its scale part is kept
-    // (it allows for the scale's correlation with the pose), the pose is fitted again.
-    const Evaluation e = evaluate(scaled(raw, scale), T, *artefact.distance, settings);
-    normal_equations(e, raw, T, &scale, H, g);
-    const double dk = Eigen::VectorXd(H.ldlt().solve(-g))[6];
-    if (!std::isfinite(dk)) break;
-    scale.k += dk;
-    if (std::abs(dk) < settings.scale_convergence) break;
-  }
-  if (!out.icp.converged)
-    return fail(ErrorCode::kAnalysisFailed,
-                "head calibration: the fit did not converge (" + out.icp.stop_reason + ")");
+  Transform T = *start;
+  if (auto failed = fit_rounds(raw, artefact, settings, T, scale, out)) return *failed;
+  // Residuals, outliers and the normal matrix at the result; free directions refuse the view.
   const Evaluation e = evaluate(scaled(raw, scale), T, *artefact.distance, settings);
-  const int m = settings.fit_motion_scale ? 7 : 6;
   if (e.inliers < kMinPoints)
     return fail(ErrorCode::kAnalysisFailed, "head calibration: only " + std::to_string(e.inliers) +
                                                 " points lie on the artefact after the fit");
+  Eigen::MatrixXd H;
+  Eigen::VectorXd g;
   normal_equations(e, raw, T, settings.fit_motion_scale ? &scale : nullptr, H, g);
   std::vector<CalibrationFreeDirection> loose =
-      free_directions(H, e, settings, out.weakest_direction_ratio);
+      free_directions(H.topLeftCorner<6, 6>(), rms_radius(e), e.centre,
+                      settings.min_direction_ratio, &out.weakest_direction_ratio);
   if (free) *free = loose;
-  if (!loose.empty()) {
-    std::string names;
-    for (const auto& f : loose) names += (names.empty() ? "" : "; ") + f.description;
-    return fail(ErrorCode::kAnalysisFailed,
-                "head calibration: the view leaves " + std::to_string(loose.size()) +
-                    " direction(s) free: " + names +
-                    " (a plane or a profile extruded along the motion does not fix them)");
-  }
-  double sum2 = 0.0;
-  for (std::size_t i = 0; i < raw.size(); ++i)
-    if (e.inlier[i]) sum2 += e.residual[i] * e.residual[i];
-  // Cov = sigma^2 H^-1, sigma^2 the residual variance with the fitted parameters' degrees of
-  // freedom taken off (least squares, e.g. Bjorck 1996, section 1.1.4).
-  const double variance = sum2 / static_cast<double>(e.inliers - static_cast<std::size_t>(m));
-  out.covariance = variance * H.inverse();
-  for (int j = 0; j < 3; ++j) {
-    out.rotation_sigma_deg[j] = std::sqrt(out.covariance(j, j)) * kRadToDeg;
-    out.translation_sigma_mm[j] = std::sqrt(out.covariance(3 + j, 3 + j));
-  }
-  if (settings.fit_motion_scale) out.motion_scale_sigma = std::sqrt(out.covariance(6, 6));
+  if (!loose.empty()) return refusal(loose);
+  set_uncertainty(e, H, out);
   // T S_c(k) p = R S_0(k) p + t + (1 - k) c R e_m: the transform for the scale about 0, the one
   // the driver's motion_axis = k R e_m applies.
   out.T_station_head = T;

@@ -74,6 +74,14 @@ struct HeadCalibration {
   int scale_rounds = 0;
 };
 
+/// The directions a point-to-plane normal matrix H (parameters: rotations about `centre` in
+/// rad, translations in mm) leaves free: eigenvectors whose eigenvalue, with the rotations
+/// scaled by `radius_mm` (the view's rms radius), is below `min_ratio` of the largest, weakest
+/// first. `weakest` (when given) gets the smallest ratio.
+std::vector<CalibrationFreeDirection> free_directions(const Eigen::Matrix<double, 6, 6>& H,
+                                                      double radius_mm, const Vec3& centre,
+                                                      double min_ratio, double* weakest = nullptr);
+
 /// Fits the head's transform. Errors (nothing returned): fewer than 100 points, non-finite
 /// points, an artefact model without exact distance or samples, no convergence (code
 /// kAnalysisFailed), and a view that leaves a direction free (kAnalysisFailed, every free
