@@ -25,6 +25,7 @@ for dir in "${dirs[@]}"; do
   if [[ -f "$cost" ]]; then
     echo "== $(basename "$dir"): ten slowest tests (s)"
     # Lines "name runs mean_seconds" until the "---" that starts the failed list.
-    awk '/^---/ { exit } NF == 3 { printf "%8.1f  %s\n", $3, $1 }' "$cost" | sort -rn | head -n 10
+    awk '/^---/ { exit } NF == 3 && $2 > 0 { printf "%8.1f  %s\n", $3, $1 }' "$cost" |
+      sort -rn | head -n 10
   fi
 done

@@ -15,6 +15,7 @@
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/sheet_part.hpp"
 #include "tests/analysis/synthetic.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 #include "tests/simulators/parts/production_parts.hpp"
 
 namespace springscan::analysis {
@@ -57,7 +58,10 @@ GlobalFitSettings quick_settings() {
 TEST(Orientation, UnevenHatIsFoundFromEveryHalfTurn) {
   std::mt19937 rng(161);
   int right = 0, trials = 0;
-  for (double extra : {3.0, 4.0, 5.0}) {
+  // Under a sanitizer one unevenness of the three (the same code runs for each).
+  const std::vector<double> extras =
+      testing::kUnderSanitizer ? std::vector<double>{4.0} : std::vector<double>{3.0, 4.0, 5.0};
+  for (double extra : extras) {
     const ProfileSpec spec = uneven_hat(extra);
     const PointCloud model = testing::sample_profile(spec, 40000, 7);
     const KdTree tree(model.points);
