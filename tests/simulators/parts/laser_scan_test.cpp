@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -213,25 +212,16 @@ TEST(LaserScan, OccludedRegionsAreAbsent) {
   EXPECT_EQ(seen, 1);
 }
 
-TEST(LaserScan, SidePanelPointCountAndSpeed) {
-  loaded_part(kSidePanel);  // loading and segmenting the CAD is not timed
-  const auto t0 = std::chrono::steady_clock::now();
+// The count comes out as asked on a large solid part. How fast: bench_production's
+// BM_LaserScanSidePanel200k (no timing here: a loaded machine must not fail a test).
+TEST(LaserScan, SidePanelPointCount) {
   const ProducedPart part = produce(kSidePanel, 2.0);
-  const auto t1 = std::chrono::steady_clock::now();
   LaserScanSettings settings;
   settings.point_count = 200000;
   settings.noise_sigma_mm = 0.02;
   const auto scan = laser_scan(part, settings);
-  const auto t2 = std::chrono::steady_clock::now();
   ASSERT_TRUE(scan) << scan.message();
-  const double n = static_cast<double>(scan->cloud.size());
-  EXPECT_NEAR(n, 200000.0, 20000.0);
-  const double ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
-  std::cout << "side panel: produced in "
-            << std::chrono::duration<double, std::milli>(t1 - t0).count() << " ms, scanned "
-            << scan->cloud.size() << " points in " << ms << " ms (" << scan->lines << " lines x "
-            << scan->points_per_line << ", spacing " << scan->line_spacing_mm << " mm)\n";
-  EXPECT_LT(ms, 1000.0);
+  EXPECT_NEAR(static_cast<double>(scan->cloud.size()), 200000.0, 20000.0);
   // Missing areas: the count still comes out as asked.
   settings.missing_fraction = 0.1;
   const auto holed = laser_scan(part, settings);
