@@ -14,6 +14,16 @@ pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
 pkg_check_modules(LIBMODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(LIBSYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
 pkg_check_modules(LIBMOSQUITTO REQUIRED IMPORTED_TARGET libmosquitto)
+# springscand's operator page (daemon/page_server.cpp; docs/operator-page.md: why civetweb).
+# Debian 12's libcivetweb-dev has no .pc file, and its CMake config fails on an executable of
+# another package (/usr/bin/civetweb): the imported target is made here from the header and
+# library.
+find_path(SPRINGSCAN_CIVETWEB_INCLUDE_DIR civetweb.h REQUIRED)
+find_library(SPRINGSCAN_CIVETWEB_LIBRARY civetweb REQUIRED)
+add_library(civetweb::civetweb UNKNOWN IMPORTED)
+set_target_properties(civetweb::civetweb PROPERTIES
+  IMPORTED_LOCATION "${SPRINGSCAN_CIVETWEB_LIBRARY}"
+  INTERFACE_INCLUDE_DIRECTORIES "${SPRINGSCAN_CIVETWEB_INCLUDE_DIR}")
 if(SPRINGSCAN_BUILD_TESTS)
   find_package(GTest REQUIRED)
   include(GoogleTest)

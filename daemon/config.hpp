@@ -11,6 +11,7 @@
 
 #include "analysis/core/expected.hpp"
 #include "daemon/log.hpp"
+#include "daemon/page_feed.hpp"
 #include "daemon/result_publisher.hpp"
 #include "daemon/station.hpp"
 #include "proto/springscan.pb.h"
@@ -33,6 +34,7 @@ struct DaemonSettings {
   std::string model_cache_dir = "/var/cache/springscan";
   LogLevel log_level = LogLevel::kInfo;
   MqttSettings mqtt;  ///< mqtt.station is filled in (the station_name when not set)
+  PageSettings http;  ///< the operator page (http { }); off unless configured
 };
 
 /// Parses and validates `text`; `file_name` is used in error messages and to resolve relative

@@ -5,6 +5,7 @@
 #include <google/protobuf/text_format.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -366,6 +367,59 @@ std::string apply_mqtt(const v1::DaemonConfig& c, const Locator& at, const std::
   return apply_mqtt_credentials(m, at, file, s);
 }
 
+Locator::Path http_path(const char* field, int index = -1) {
+  return Locator::Path{{"http", -1}, {field, index}};
+}
+
+// "06:00" -> 360; -1 when it is not a time of day.
+int minutes_of_day(const std::string& text) {
+  int hours = 0, minutes = 0;
+  char end = 0;
+  if (text.size() != 5 || std::sscanf(text.c_str(), "%2d:%2d%c", &hours, &minutes, &end) != 2 ||
+      hours < 0 || hours > 23 || minutes < 0 || minutes > 59) {
+    return -1;
+  }
+  return hours * 60 + minutes;
+}
+
+/// The http { } section (the operator page, docs/operator-page.md): on when present (unless
+/// enabled: false).
+std::string apply_http(const v1::DaemonConfig& c, const Locator& at, DaemonSettings& out) {
+  if (!c.has_http()) return "";
+  const v1::HttpConfig& h = c.http();
+  PageSettings& s = out.http;
+  s.enabled = !h.has_enabled() || h.enabled();
+  if (h.has_address()) {
+    if (!ipv4(h.address())) {
+      return at.where(http_path("address")) + ": '" + h.address() + "' is not an IPv4 address";
+    }
+    s.address = h.address();
+  }
+  std::string e;
+  if (h.has_port() && !(e = out_of_range(at, http_path("port"), h.port(), 0, 65535)).empty())
+    return e;
+  if (h.has_port()) s.port = h.port();
+  if (h.has_max_clients() &&
+      !(e = out_of_range(at, http_path("max_clients"), h.max_clients(), 1, 1000)).empty())
+    return e;
+  if (h.has_max_clients()) s.max_clients = h.max_clients();
+  if (h.has_write_timeout_ms() &&
+      !(e = out_of_range(at, http_path("write_timeout_ms"), h.write_timeout_ms(), 100, 60000))
+           .empty())
+    return e;
+  if (h.has_write_timeout_ms()) s.write_timeout_ms = h.write_timeout_ms();
+  if (h.shift_starts_size() > 0) s.shift_starts_min.clear();
+  for (int i = 0; i < h.shift_starts_size(); ++i) {
+    const int minutes = minutes_of_day(h.shift_starts(i));
+    if (minutes < 0) {
+      return at.where(http_path("shift_starts", i)) + ": '" + h.shift_starts(i) +
+             "' is not a time of day HH:MM";
+    }
+    s.shift_starts_min.push_back(minutes);
+  }
+  return "";
+}
+
 }  // namespace
 
 Expected<DaemonSettings> parse_daemon_config(const std::string& text,
@@ -386,6 +440,7 @@ Expected<DaemonSettings> parse_daemon_config(const std::string& text,
   if (error.empty()) error = apply_parts(config, at, file_name, settings);
   if (error.empty()) error = apply_top_level(config, at, file_name, settings);
   if (error.empty()) error = apply_mqtt(config, at, file_name, settings);
+  if (error.empty()) error = apply_http(config, at, settings);
   if (!error.empty()) return fail(error);
   return settings;
 }

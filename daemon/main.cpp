@@ -16,6 +16,7 @@
 #include "analysis/cad/model.hpp"
 #include "analysis/messages/cad_model_proto.hpp"
 #include "daemon/config.hpp"
+#include "daemon/page_server.hpp"
 #include "daemon/result_publisher.hpp"
 #include "daemon/station.hpp"
 #include "daemon/wiring.hpp"
@@ -121,7 +122,29 @@ int check_config(const std::string& config_path, const springscan::daemon::Daemo
                                std::to_string(mqtt.port) + (mqtt.ca_file.empty() ? "" : " (TLS)") +
                                " as station " + mqtt.station
                          : "; MQTT publishing off"));
+  const springscan::daemon::PageSettings& http = settings.http;
+  log.info(http.enabled ? "operator page on http://" + http.address + ":" +
+                              std::to_string(http.port) + "/ (docs/operator-page.md)"
+                        : "operator page off (no http { } section)");
   return 0;
+}
+
+// The operator page (docs/operator-page.md), when configured: fed by the station's status and
+// the report store; HTTP_PORT= tells a supervisor the port bound (port 0 takes a free one).
+springscan::analysis::Expected<std::unique_ptr<springscan::daemon::PageServer>> start_page(
+    const springscan::daemon::DaemonSettings& settings, springscan::daemon::Station& station,
+    springscan::daemon::Log& log) {
+  using namespace springscan::daemon;
+  if (!settings.http.enabled) return std::unique_ptr<PageServer>();
+  auto page =
+      PageServer::start(settings.http, station.store(), settings.station.runner.station_name, log);
+  if (!page) return page.error();
+  PageFeed& feed = (*page)->feed();
+  station.watch_status([&feed](const MachineStatus& status) { feed.on_status(status); });
+  log.info("operator page on http://" + settings.http.address + ":" +
+           std::to_string((*page)->port()) + "/");
+  sd_notify(0, ("HTTP_PORT=" + std::to_string((*page)->port())).c_str());
+  return page;
 }
 
 // After the station stopped: a watchdog bounds the wait for a running analysis (kStopBound).
@@ -170,10 +193,17 @@ int run_station(const springscan::daemon::DaemonSettings& settings, springscan::
     }
     publisher = std::move(*started);
   }
+  auto page = start_page(settings, **station, log);
+  if (!page) {
+    log.error("cannot start: " + page.message());
+    return 1;
+  }
   (*station)->run(g_stop);
   arm_forced_stop(log);
-  publisher.reset();  // "offline" to the broker, the last acknowledged record saved
-  station->reset();   // cancels a running scan, waits for the runner
+  (*station)->watch_status({});  // the loop has stopped; the feed goes next
+  page->reset();                 // every open page's stream ends
+  publisher.reset();             // "offline" to the broker, the last acknowledged record saved
+  station->reset();              // cancels a running scan, waits for the runner
   log.info("springscand stopped");
   return 0;
 }

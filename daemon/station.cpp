@@ -184,6 +184,7 @@ void Station::update_machine(Clock::time_point now) {
   live_.scan_progress_pct = machine_.status().busy ? runner_->progress_pct() : 0;
   image_.publish_status(machine_.status(), live_);
   image_.refresh_window();
+  if (watch_status_) watch_status_(machine_.status());
   const std::string text = status_text();
   if (text != last_status_text_) {
     notify("STATUS=" + text);

@@ -31,6 +31,9 @@ struct StationSettings {
 
 /// Receives sd_notify(3) messages ("READY=1", "STATUS=...", "WATCHDOG=1"). May be empty.
 using NotifyFn = std::function<void(const std::string& message)>;
+/// Receives the machine status after every update, on the event loop's thread: it must return
+/// at once (the operator page copies it, page_feed.hpp).
+using StatusFn = std::function<void(const MachineStatus& status)>;
 
 class Station {
  public:
@@ -53,6 +56,8 @@ class Station {
   void step(int max_wait_ms);
 
   const MachineStatus& status() const { return machine_.status(); }
+  /// Sets the status watcher (before run()).
+  void watch_status(StatusFn watcher) { watch_status_ = std::move(watcher); }
   const ModbusServerStats& modbus_stats() const { return server_->stats(); }
   std::size_t modbus_connections() const { return server_->connection_count(); }
 
@@ -69,6 +74,7 @@ class Station {
   StationSettings settings_;
   Log& log_;
   NotifyFn notify_;
+  StatusFn watch_status_;
   RegisterImage image_;
   InspectionMachine machine_;
   ReportStore store_;

@@ -13,6 +13,8 @@ packages=(
   libvtk9-dev
   libprotobuf-dev protobuf-compiler zlib1g-dev
   libusb-1.0-0-dev libmodbus-dev libsystemd-dev libmosquitto-dev
+  # springscand's operator page (docs/operator-page.md: why civetweb).
+  libcivetweb-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
 )

@@ -217,6 +217,35 @@ TEST_F(ConfigTest, MqttErrorsNameTheField) {
   EXPECT_NE(error("host: \"\"").find("mqtt.host: is empty"), std::string::npos);
 }
 
+// The operator page (docs/operator-page.md): off without its section, 127.0.0.1 by default.
+TEST_F(ConfigTest, HttpIsOffByDefaultAndOnWithItsSection) {
+  auto off = parse(kMinimal);
+  ASSERT_TRUE(off.ok()) << off.message();
+  EXPECT_FALSE(off->http.enabled);
+  auto on = parse(std::string(kMinimal) + "http { port: 8081 shift_starts: \"07:30\" }\n");
+  ASSERT_TRUE(on.ok()) << on.message();
+  EXPECT_TRUE(on->http.enabled);
+  EXPECT_EQ(on->http.address, "127.0.0.1");
+  EXPECT_EQ(on->http.port, 8081);
+  EXPECT_EQ(on->http.shift_starts_min, std::vector<int>{7 * 60 + 30});
+  EXPECT_FALSE(parse(std::string(kMinimal) + "http { enabled: false }\n")->http.enabled);
+}
+
+TEST_F(ConfigTest, HttpErrorsNameTheField) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"http { address: \"localhost\" }", "http.address: 'localhost' is not an IPv4 address"},
+      {"http { port: 70000 }", "http.port: 70000 is not in 0..65535"},
+      {"http { max_clients: 0 }", "http.max_clients: 0 is not in 1..1000"},
+      {"http { shift_starts: \"06:00\" shift_starts: \"25:00\" }",
+       "http.shift_starts[1]: '25:00' is not a time of day HH:MM"},
+  };
+  for (const auto& [text, expected] : cases) {
+    auto s = parse(std::string(kMinimal) + text + "\n");
+    ASSERT_FALSE(s.ok()) << text;
+    EXPECT_NE(s.message().find(expected), std::string::npos) << s.message();
+  }
+}
+
 TEST_F(ConfigTest, MissingFileIsAnError) {
   auto s = load_daemon_config(dir_.str() + "/absent.textproto");
   ASSERT_FALSE(s.ok());

@@ -95,6 +95,13 @@ class DaemonProcess {
     std::lock_guard lock(mutex_);
     return notes_.find(text) != std::string::npos;
   }
+  /// The value of the last "NAME=value" line the daemon sent before READY=1 (HTTP_PORT=), or "".
+  std::string early_value(const std::string& name) const {
+    const std::size_t at = early_notes_.rfind(name + "=");
+    if (at == std::string::npos) return "";
+    const std::size_t start = at + name.size() + 1;
+    return early_notes_.substr(start, early_notes_.find('\n', start) - start);
+  }
   pid_t pid() const { return pid_; }
   /// The wait status if the child has exited by itself (reaped now; pid() is then -1), else
   /// nullopt. Never blocks: a supervisor polls it to tell a crash from a running daemon.
@@ -136,6 +143,7 @@ class DaemonProcess {
       const ssize_t n = ::recv(notify_fd_, buffer, sizeof buffer - 1, 0);
       if (n > 0) {
         const std::string message(buffer, static_cast<std::size_t>(n));
+        early_notes_.append(message).push_back('\n');
         const auto at = message.find("MODBUS_PORT=");
         if (message.find("READY=1") != std::string::npos && at != std::string::npos) {
           port_ = std::stoi(message.substr(at + 12));
@@ -171,7 +179,8 @@ class DaemonProcess {
   std::thread drain_;
   std::atomic<bool> stop_drain_{false};
   std::mutex mutex_;
-  std::string notes_;  // the notifications after READY=1 (the last 64 KiB)
+  std::string notes_;        // the notifications after READY=1 (the last 64 KiB)
+  std::string early_notes_;  // the notifications up to READY=1 (written before drain_ starts)
 };
 
 }  // namespace springscan::daemon::testing

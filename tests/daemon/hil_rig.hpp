@@ -58,6 +58,8 @@ struct HilConfig {
 struct HilDevice {
   double scan_duration_s = 0.4;
   simulators::DeviceFaults faults;
+  double step_mm = 1.0;          ///< between laser profiles along the 80 mm width
+  int points_per_profile = 200;  ///< across the ~120 mm line
 };
 
 class HilTest : public ::testing::Test {
@@ -83,9 +85,9 @@ class HilTest : public ::testing::Test {
   void emulate(const std::vector<double>& springback_deg, const HilDevice& d = {}) {
     simulators::ScannerDeviceSettings s;
     s.noise.sigma_mm = 0.02;
-    s.laser.step_mm = 1.0;             // 81 profiles over the 80 mm width
-    s.laser.points_per_profile = 200;  // 0.6 mm bins across the ~120 mm line
-    s.config.points_per_profile = 200;
+    s.laser.step_mm = d.step_mm;                        // default: 81 profiles over the 80 mm width
+    s.laser.points_per_profile = d.points_per_profile;  // default: 0.6 mm bins across the line
+    s.config.points_per_profile = d.points_per_profile;
     s.scan_duration_s = d.scan_duration_s;
     s.faults = d.faults;
     parts::ScanSimulationSettings dense;  // the part's surface, densely and noise-free
