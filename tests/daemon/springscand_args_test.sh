@@ -52,4 +52,19 @@ config "$tmp/broken.step" ""
 "$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
 [[ $rc == 2 ]] || fail "--check of a broken CAD file: exit $rc"
 grep -q "part 1 (demo): .*broken.step" "$tmp/out" || fail "broken CAD not named: $(cat "$tmp/out")"
-echo "springscand arguments: 7 checks passed"
+
+# The operator page's section (docs/operator-page.md): off without it, its address with it, a
+# bad field named with file:line.
+config "$src/demo/hat-profile.step" ""
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1
+grep -q "operator page off" "$tmp/out" || fail "--check did not say the page is off: $(cat "$tmp/out")"
+echo 'http { port: 8081 }' >>"$tmp/c.textproto"
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
+[[ $rc == 0 ]] || fail "--check with http { }: exit $rc: $(cat "$tmp/out")"
+grep -q "operator page on http://127.0.0.1:8081/" "$tmp/out" || fail "--check did not give the page's address: $(cat "$tmp/out")"
+config "$src/demo/hat-profile.step" ""
+echo 'http { address: "localhost" }' >>"$tmp/c.textproto"
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
+[[ $rc == 2 ]] || fail "--check of a bad http address: exit $rc"
+grep -q "c.textproto:6:.*http.address: 'localhost' is not an IPv4 address" "$tmp/out" || fail "bad http address not named: $(cat "$tmp/out")"
+echo "springscand arguments: 10 checks passed"
