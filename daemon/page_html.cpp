@@ -40,7 +40,7 @@ tr.bad td{color:#c62828;font-weight:600}
 .counts{display:flex;gap:2em;flex-wrap:wrap}.counts div{font-size:.9em;color:#555}
 .counts b{display:block;font-size:1.8em;color:#1b1d21}
 #recent td.pass{color:#1b7f3b;font-weight:700}#recent td.fail{color:#c62828;font-weight:700}
-#recent td.none{color:#b26a00;font-weight:700}
+#recent td.none{color:#b26a00;font-weight:700}#recent th,#recent td{text-align:left}
 </style></head>
 <body>
 <header><h1>springscan <span id="station"></span></h1><span id="conn">connecting…</span></header>
@@ -106,7 +106,9 @@ function renderLast(last) {
       last.part_id + ' · ' + last.time + ' · cycle ' + num(last.cycle_time_ms / 1000, 1) + ' s';
   $('criteria').textContent = last.verdict === 'PASS' ? 'All criteria met.' :
       (last.reasons.length ? 'Failed criteria:' : '');
-  $('reasons').replaceChildren(...last.reasons.map((r) => {
+  // The reasons are the failed criteria; a part that passed has none to show.
+  const failed = last.verdict === 'PASS' ? [] : last.reasons;
+  $('reasons').replaceChildren(...failed.map((r) => {
     const li = document.createElement('li'); li.textContent = r; return li; }));
   const a = $('report-link');
   a.href = last.report; a.hidden = false;

@@ -153,13 +153,17 @@ void ShiftCounts::count(const v1::InspectionReport& report, int sign) {
 
 const char* page_verdict(const v1::InspectionReport& report) {
   switch (static_cast<regs::ResultCode>(report.result_code())) {
-    case regs::ResultCode::kOk:
-      return "PASS";
-    case regs::ResultCode::kFormNok:
-    case regs::ResultCode::kAmbiguous:
-      return "FAIL";
-    default:
+    case regs::ResultCode::kNoData:
+    case regs::ResultCode::kScanFailed:
+    case regs::ResultCode::kAnalysisFailed:
       return "NO RESULT";
+    default:
+      // The runner sets RESULT_CODE 0 only with verdict.pass; a report that `springscan analyze`
+      // wrote has no RESULT_CODE (0), and then the verdict alone decides.
+      return static_cast<regs::ResultCode>(report.result_code()) == regs::ResultCode::kOk &&
+                     report.verdict().pass()
+                 ? "PASS"
+                 : "FAIL";
   }
 }
 

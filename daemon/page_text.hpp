@@ -52,7 +52,8 @@ struct PageView {
   ShiftCounts shift;
 };
 
-/// The page's word for a result: PASS, FAIL, or NO RESULT (the scan or the analysis failed).
+/// The page's word for a result: PASS (RESULT_CODE 0 and verdict.pass), FAIL, or NO RESULT
+/// (RESULT_CODE 2, 3, 4: nothing was measured).
 const char* page_verdict(const v1::InspectionReport& report);
 /// The page's word for a state: starting, idle, scanning, analysing, done or fault.
 const char* page_state(regs::State state);

@@ -22,6 +22,7 @@ v1::InspectionReport report(std::uint32_t seq, regs::ResultCode code) {
   v1::InspectionReport r;
   r.set_result_seq(seq);
   r.set_result_code(static_cast<std::uint32_t>(code));
+  r.mutable_verdict()->set_pass(code == regs::ResultCode::kOk);
   return r;
 }
 
@@ -31,6 +32,11 @@ TEST(PageText, VerdictAndStateWords) {
   EXPECT_STREQ(page_verdict(report(1, regs::ResultCode::kAmbiguous)), "FAIL");
   EXPECT_STREQ(page_verdict(report(1, regs::ResultCode::kScanFailed)), "NO RESULT");
   EXPECT_STREQ(page_verdict(report(1, regs::ResultCode::kAnalysisFailed)), "NO RESULT");
+  v1::InspectionReport offline;  // `springscan analyze` sets no RESULT_CODE: the verdict decides
+  offline.mutable_verdict()->set_pass(false);
+  EXPECT_STREQ(page_verdict(offline), "FAIL");
+  offline.mutable_verdict()->set_pass(true);
+  EXPECT_STREQ(page_verdict(offline), "PASS");
   EXPECT_STREQ(page_state(regs::State::kIdle), "idle");
   EXPECT_STREQ(page_state(regs::State::kAcquiring), "scanning");
   EXPECT_STREQ(page_state(regs::State::kAnalyzing), "analysing");
