@@ -19,6 +19,7 @@
 #include "daemon/page_text.hpp"
 #include "hil_rig.hpp"
 #include "page_client.hpp"
+#include "tests/support/test_paths.hpp"
 
 namespace springscan::daemon {
 namespace {
@@ -126,9 +127,9 @@ class HilPageTest : public HilTest {
     std::snprintf(shift, sizeof shift, "%02d:%02d", local.tm_hour, local.tm_min);
     // Part 2: the same hat with a tolerance its springback cannot meet, so verdicts alternate.
     std::ofstream(config_path(), std::ios::app)
-        << "parts { part_id: 2 name: \"demo hat, tight\" cad_file: \"" SPRINGSCAN_SOURCE_DIR
-           "/demo/hat-profile.step\"\n  settings { verdict { tolerance_mm: 0.5 "
-           "angle_tolerance_deg: 0.1 } } }\n"
+        << "parts { part_id: 2 name: \"demo hat, tight\" cad_file: \""
+        << springscan::test_paths::source("demo/hat-profile.step")
+        << "\"\n  settings { verdict { tolerance_mm: 0.5 angle_tolerance_deg: 0.1 } } }\n"
         << "http { address: \"127.0.0.1\" port: 0 shift_starts: \"" << shift << "\" }\n"
         << "station_name: \"press 4\"\n";
   }
