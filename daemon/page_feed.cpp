@@ -83,8 +83,20 @@ void PageFeed::watch() {
         if (r.created >= start) shift_.count(r.report, 1);  // already in the new shift
       }
     }
-    if (take_new_records() || status_changed || new_shift) rebuild();
+    const bool added = take_new_records();
+    if (added || status_changed || new_shift) rebuild();
+    // After the snapshot, so that reading report.html never delays a verdict; a page asking
+    // for the picture before this reads it itself (deviation_svg).
+    if (added) cache_picture(recent_.front().record);
   }
+}
+
+void PageFeed::cache_picture(std::uint64_t record) {
+  auto html = analysis::read_file_bytes(store_.record_path(record) + "/report.html");
+  std::string svg = html ? deviation_svg_from_report_html(*html) : std::string();
+  std::lock_guard lock(mutex_);
+  svg_record_ = record;
+  svg_ = std::move(svg);
 }
 
 namespace {
@@ -117,12 +129,7 @@ void PageFeed::load_history() {
       break;
     }
   }
-  if (!recent_.empty()) {
-    const std::string svg = deviation_svg(recent_.front().record);
-    std::lock_guard lock(mutex_);
-    svg_record_ = recent_.front().record;
-    svg_ = svg;
-  }
+  if (!recent_.empty()) cache_picture(recent_.front().record);
 }
 
 bool PageFeed::take_new_records() {
@@ -143,14 +150,6 @@ bool PageFeed::take_new_records() {
 
 void PageFeed::add_result(PageResult result) {
   if (result.created >= shift_start_) shift_.count(result.report, 1);
-  // The picture first, so the snapshot that names it finds it ready.
-  auto html = analysis::read_file_bytes(store_.record_path(result.record) + "/report.html");
-  std::string svg = html ? deviation_svg_from_report_html(*html) : std::string();
-  {
-    std::lock_guard lock(mutex_);
-    svg_record_ = result.record;
-    svg_ = std::move(svg);
-  }
   recent_.push_front(std::move(result));
   while (recent_.size() > static_cast<std::size_t>(std::max(settings_.recent_results, 1)))
     recent_.pop_back();

@@ -82,6 +82,7 @@ class PageFeed {
   void load_history();
   bool take_new_records();
   void add_result(PageResult result);
+  void cache_picture(std::uint64_t record);
   void rebuild();
 
   PageSettings settings_;
