@@ -5,6 +5,7 @@
 #include <google/protobuf/text_format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -229,6 +230,39 @@ std::string apply_parts(const v1::DaemonConfig& c, const Locator& at, const std:
   return "";
 }
 
+Locator::Path check_path(int reference, const char* field) {
+  return Locator::Path{{"check_part", -1}, {"reference", reference}, {field, -1}};
+}
+
+// check_part { part_id reference { characteristic value limit } }: a part of the catalogue,
+// references with finite values and positive limits, each characteristic once.
+std::string apply_check_part(const v1::DaemonConfig& c, const Locator& at, DaemonSettings& out) {
+  if (!c.has_check_part()) return "";
+  const v1::CheckPartConfig& check = c.check_part();
+  const Locator::Path id{{"check_part", -1}, {"part_id", -1}};
+  if (check.part_id() < 1 || check.part_id() > 65535 ||
+      out.station.machine.known_parts.count(static_cast<std::uint16_t>(check.part_id())) == 0)
+    return at.where(id) + ": " + std::to_string(check.part_id()) +
+           " is not a part_id of the catalogue (parts { }): the check part is inspected as a part";
+  if (check.reference_size() == 0)
+    return at.where({{"check_part", -1}}) + ": no reference { characteristic value limit }";
+  std::set<std::string> seen;
+  for (int i = 0; i < check.reference_size(); ++i) {
+    const v1::CheckReference& r = check.reference(i);
+    if (r.characteristic().empty()) return at.where(check_path(i, "characteristic")) + ": is empty";
+    if (!seen.insert(r.characteristic()).second)
+      return at.where(check_path(i, "characteristic")) + ": '" + r.characteristic() +
+             "' appears twice";
+    if (!std::isfinite(r.value()))
+      return at.where(check_path(i, "value")) + ": " + number(r.value()) + " is not a number";
+    if (!(r.limit() > 0.0) || !std::isfinite(r.limit()))
+      return at.where(check_path(i, "limit")) + ": " + number(r.limit()) +
+             " is not a positive number";
+  }
+  out.station.runner.check_part = check;
+  return "";
+}
+
 std::string apply_top_level(const v1::DaemonConfig& c, const Locator& at, const std::string& file,
                             DaemonSettings& out) {
   const v1::ScannerConfig& sc = c.scanner();
@@ -438,6 +472,7 @@ Expected<DaemonSettings> parse_daemon_config(const std::string& text,
   DaemonSettings settings;
   std::string error = apply_modbus(config.modbus(), at, settings);
   if (error.empty()) error = apply_parts(config, at, file_name, settings);
+  if (error.empty()) error = apply_check_part(config, at, settings);
   if (error.empty()) error = apply_top_level(config, at, file_name, settings);
   if (error.empty()) error = apply_mqtt(config, at, file_name, settings);
   if (error.empty()) error = apply_http(config, at, settings);

@@ -5,9 +5,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <ctime>
 #include <stdexcept>
 
+#include "report/check_part.hpp"
 #include "report/inspection_files.hpp"
 
 namespace springscan::daemon {
@@ -18,6 +20,13 @@ std::string job_name(const RunnerJob& job) {
   return "job " + std::to_string(job.request.job_id) + " part " +
          std::to_string(job.request.part_id) + " (result seq " +
          std::to_string(regs::result_seq_from_record(job.record)) + ")";
+}
+
+// A check part's figure for the log: deg and mm to a thousandth, as the references are set.
+std::string decimals(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f", value);
+  return text;
 }
 
 // What the operator should do, per ERROR_CODE (docs/modbus-register-map.md, "Error codes").
@@ -225,7 +234,7 @@ void JobRunner::run(const RunnerJob& job) {
   log_.info(name + ": scanned " + std::to_string(scan->size()) + " points in " +
             std::to_string(std::chrono::duration<double>(scanned - started).count()) +
             " s; analysing");
-  post(RunnerEvent{RunnerEvent::Kind::kAcquired, job.record, {}, {}, {}});
+  post(RunnerEvent{RunnerEvent::Kind::kAcquired, job.record, {}, {}, {}, {}});
   auto outcome = analyze_(job.request.part_id, *scan);
   if (!outcome) {
     const PlcError plc = plc_error_for_analysis(outcome.code());
@@ -245,7 +254,34 @@ void JobRunner::run(const RunnerJob& job) {
   std::string verdict = pass ? "PASS" : "FAIL";
   for (const auto& reason : outcome->report.verdict().reasons()) verdict += "; " + reason;
   log_.info(name + ": " + verdict);
-  post(finish(job, std::move(*outcome), end));
+  std::optional<v1::CheckResult> check = check_part(job, outcome->report);
+  RunnerEvent event = finish(job, std::move(*outcome), end);
+  // Only a persisted comparison changes CALIBRATION_DRIFT: its report is the evidence.
+  if (event.end.persisted) event.check = std::move(check);
+  post(std::move(event));
+}
+
+std::optional<v1::CheckResult> JobRunner::check_part(const RunnerJob& job,
+                                                     v1::InspectionReport& report) {
+  const auto& config = settings_.check_part;
+  if (!config || config->part_id() != job.request.part_id) return std::nullopt;
+  *report.mutable_check() = springscan::report::check_part(report, *config);
+  const v1::CheckResult& check = report.check();
+  std::string items;
+  for (const v1::CheckItem& item : check.items()) {
+    if (!item.beyond()) continue;
+    items += "; " + item.characteristic() + " " +
+             (item.has_measured() ? decimals(item.measured()) : std::string("not measured")) +
+             " (reference " + decimals(item.reference()) + " +- " + decimals(item.limit()) + ")";
+  }
+  const std::string text = job_name(job) + ": check part compared with " +
+                           std::to_string(check.items_size()) + " references: ";
+  if (check.drift()) {
+    log_.warning(text + "BEYOND its limits" + items);
+  } else {
+    log_.info(text + "all within their limits");
+  }
+  return check;
 }
 
 RunnerEvent JobRunner::finish(const RunnerJob& job, analysis::InspectionOutcome outcome,
@@ -262,7 +298,7 @@ RunnerEvent JobRunner::finish(const RunnerJob& job, analysis::InspectionOutcome 
   if (end.result_code != regs::ResultCode::kOk) report.mutable_verdict()->set_pass(false);
   report.set_cycle_time_ms(
       std::chrono::duration<double, std::milli>(Clock::now() - job.request.trigger_time).count());
-  RunnerEvent event{RunnerEvent::Kind::kFinished, job.record, end, {}, {}};
+  RunnerEvent event{RunnerEvent::Kind::kFinished, job.record, end, {}, {}, {}};
   auto stored = store_.persist(job.record, outcome);
   if (!stored) {
     event.end.persisted = false;

@@ -43,6 +43,9 @@ using AnalyzeFn = std::function<analysis::Expected<analysis::InspectionOutcome>(
 struct RunnerSettings {
   std::string station_name = "springscan";  ///< written into every report
   double probe_interval_s = 1.0;  ///< how often an idle runner checks (and reopens) the scanner
+  /// The check part (config check_part, docs/calibration.md): a report of its part id is
+  /// compared with the references (report/check_part.hpp) into InspectionReport.check.
+  std::optional<v1::CheckPartConfig> check_part;
 };
 
 struct RunnerJob {
@@ -57,6 +60,8 @@ struct RunnerEvent {
   JobEnd end;               ///< kFinished only
   ResultBlock block;        ///< kFinished and end.persisted only
   std::string report_path;  ///< kFinished and end.persisted only
+  /// kFinished of the check part when its scan was analysed: its comparison (report.check).
+  std::optional<v1::CheckResult> check;
 };
 
 class JobRunner {
@@ -84,6 +89,7 @@ class JobRunner {
   void probe_scanner();
   void post(RunnerEvent event);
   RunnerEvent finish(const RunnerJob& job, analysis::InspectionOutcome outcome, JobEnd end);
+  std::optional<v1::CheckResult> check_part(const RunnerJob& job, v1::InspectionReport& report);
 
   drivers::Scanner& scanner_;
   AnalyzeFn analyze_;

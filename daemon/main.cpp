@@ -112,9 +112,36 @@ CommandLine parse_command_line(int argc, char** argv) {
   return cl;
 }
 
+// --check: the head calibration in force, with its date, and the check part that watches it
+// (docs/calibration.md), so a technician sees which calibration a config brings.
+void log_calibration(const springscan::daemon::DaemonSettings& settings,
+                     springscan::daemon::Log& log) {
+  const springscan::v1::ScannerConfig& scanner = settings.scanner;
+  if (scanner.has_calibration()) {
+    const springscan::v1::StationCalibration& c = scanner.calibration();
+    std::string heads;
+    for (const auto& head : c.heads()) heads += (heads.empty() ? "" : ", ") + head.name();
+    log.info("calibration in force: made " +
+             (c.created_utc().empty() ? "(no date)" : c.created_utc()) +
+             " by springscan calibrate from artefact " + c.artefact_file() + ", " +
+             std::to_string(c.heads_size()) + " head(s)" + (heads.empty() ? "" : ": " + heads));
+  } else {
+    log.info(std::string("calibration in force: ") +
+             (scanner.has_laser_calibration() ? "scanner.laser_calibration as typed into the config"
+                                              : "the scanner's default mount") +
+             ", no record of springscan calibrate (no date)");
+  }
+  const auto& check = settings.station.runner.check_part;
+  log.info(check ? "check part: part " + std::to_string(check->part_id()) + ", " +
+                       std::to_string(check->reference_size()) +
+                       " reference(s); beyond a limit raises CALIBRATION_DRIFT"
+                 : std::string("no check part (check_part { }): calibration drift is not watched"));
+}
+
 // --check: the config was valid; every CAD file must load too. Exit status 0 or 2.
 int check_config(const std::string& config_path, const springscan::daemon::DaemonSettings& settings,
                  springscan::daemon::Log& log) {
+  log_calibration(settings, log);
   if (!check_part_models(settings.parts, log)) return 2;
   const springscan::daemon::MqttSettings& mqtt = settings.mqtt;
   log.info(config_path + ": config OK" +

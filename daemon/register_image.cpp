@@ -45,9 +45,9 @@ void RegisterImage::publish_status(const MachineStatus& s, const LiveValues& liv
   auto* m = mapping_.get();
   const bool heartbeat_bit = ((live.heartbeat / 10) & 1u) != 0;  // toggles every second
   const bool di[regs::kDiCount] = {
-      s.ready,       s.trigger_ack,      s.busy,           s.result_valid, s.part_ok,
-      s.error(),     s.trigger_rejected, s.scanner_online, heartbeat_bit,  s.plc_comm_lost,
-      s.result_stale};
+      s.ready,        s.trigger_ack,         s.busy,           s.result_valid, s.part_ok,
+      s.error(),      s.trigger_rejected,    s.scanner_online, heartbeat_bit,  s.plc_comm_lost,
+      s.result_stale, live.calibration_drift};
   std::uint16_t status_word = 0;
   for (int i = 0; i < regs::kDiCount; ++i) {
     m->tab_input_bits[i] = di[i] ? 1 : 0;

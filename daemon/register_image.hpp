@@ -20,6 +20,7 @@ struct LiveValues {
   std::uint16_t boot_id = 1;
   std::uint16_t heartbeat = 0;
   std::uint16_t scan_progress_pct = 0;
+  bool calibration_drift = false;  ///< CALIBRATION_DRIFT: latched by the station
 };
 
 class RegisterImage {

@@ -24,7 +24,8 @@ namespace springscan::daemon::regs {
 // dropping RESULT_VALID, PLC_COMM_LOST raises ERROR_CODE 7, PAGE_SELECT past the last page and
 // unit id 0 as below, ERROR_DETAIL 5..8 (stalled endpoint, sequence gap, protocol error, device
 // fault), which version 1 reported as 9.
-inline constexpr std::uint16_t kMapVersion = 3;
+// 4: CALIBRATION_DRIFT (discrete input 11, status word bit 11), from the check part (issue 42).
+inline constexpr std::uint16_t kMapVersion = 4;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
@@ -47,7 +48,10 @@ inline constexpr std::uint16_t kDiScannerOnline = 7;    ///< the scanner is pres
 inline constexpr std::uint16_t kDiHeartbeat = 8;        ///< toggles every second
 inline constexpr std::uint16_t kDiPlcCommLost = 9;      ///< PLC_HEARTBEAT went silent (latched)
 inline constexpr std::uint16_t kDiResultStale = 10;  ///< RESULT_VALID unacknowledged > result_ttl_s
-inline constexpr std::uint16_t kDiCount = 11;
+/// The check part was beyond a reference limit (latched until a check part passes; the PLC holds
+/// production until the heads are recalibrated, docs/calibration.md).
+inline constexpr std::uint16_t kDiCalibrationDrift = 11;
+inline constexpr std::uint16_t kDiCount = 12;
 
 // ------------------------------------------------------------------------------------------
 // Holding registers (FC03 read, FC06/FC16 write). 0..4 are written by the PLC; the mirrors

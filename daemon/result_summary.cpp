@@ -63,6 +63,23 @@ std::string result_summary_json(const v1::InspectionReport& report, const Publis
     w.end_object();
   }
   w.end_array();
+  // The check part's comparison (docs/calibration.md): only in a check part's result.
+  if (report.has_check()) {
+    w.begin_object("check");
+    w.field("calibration_drift", report.check().drift());
+    w.begin_array("items");
+    for (const v1::CheckItem& item : report.check().items()) {
+      w.begin_object();
+      w.field("characteristic", item.characteristic());
+      w.field("reference", item.reference());
+      w.field("limit", item.limit());
+      if (item.has_measured()) w.field("measured", item.measured());
+      w.field("beyond", item.beyond());
+      w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+  }
   w.end_object();
   return w.take();
 }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 
 #include "analysis/io/file_io.hpp"
@@ -72,6 +73,11 @@ std::uint16_t next_boot_id(const std::string& report_dir, Log& log) {
   return static_cast<std::uint16_t>(id);
 }
 
+/// Present while CALIBRATION_DRIFT is latched, so that a restart does not clear the alarm.
+std::string drift_marker(const std::string& report_dir) {
+  return report_dir + "/calibration_drift";
+}
+
 }  // namespace
 
 Station::Station(const StationSettings& settings, ReportStore store, Log& log, NotifyFn notify)
@@ -99,6 +105,7 @@ analysis::Expected<std::unique_ptr<Station>> Station::create(const StationSettin
   std::unique_ptr<Station> station(
       new Station(settings, std::move(*store), log, std::move(notify)));
   station->restore_last_result();
+  station->restore_calibration_drift();
   auto server = ModbusServer::open(settings.modbus, station->image_.mapping(), log);
   if (!server) return server.error();
   station->server_ = std::move(*server);
@@ -127,6 +134,40 @@ void Station::restore_last_result() {
   log_.info("restored the result block of record " + std::to_string(last_record_) + " (seq " +
             std::to_string((*latest)->result_seq()) +
             ") from before the restart; RESULT_VALID stays 0 until the next inspection");
+}
+
+void Station::restore_calibration_drift() {
+  std::error_code ec;
+  if (!std::filesystem::exists(drift_marker(settings_.reports.directory), ec)) return;
+  live_.calibration_drift = true;
+  log_.warning(
+      "CALIBRATION_DRIFT (discrete input 11) is still set from before the restart: the "
+      "last check part was beyond its references. Recalibrate the heads, then measure "
+      "the check part again (docs/calibration.md)");
+}
+
+// The latch: raised by a check part beyond a limit, cleared only by one within all of them.
+void Station::on_check_part(const v1::CheckResult& check, std::uint16_t part_id) {
+  const bool was = live_.calibration_drift;
+  live_.calibration_drift = check.drift();
+  const std::string marker = drift_marker(settings_.reports.directory);
+  const std::string part = "the check part (part " + std::to_string(part_id) + ")";
+  if (check.drift()) {
+    auto written = analysis::write_file_atomically(marker, "check part beyond its references\n");
+    if (!written) log_.warning("cannot record CALIBRATION_DRIFT: " + written.message());
+    log_.error("CALIBRATION DRIFT: " + part + (was ? " is still" : " is") +
+               " beyond its references (see the line above and its report). CALIBRATION_DRIFT "
+               "(discrete input 11) stays set until a check part passes; the PLC holds "
+               "production. Recalibrate the heads (springscan calibrate, docs/calibration.md), "
+               "then measure the check part again.");
+    return;
+  }
+  std::error_code ec;
+  std::filesystem::remove(marker, ec);
+  if (was)
+    log_.info(part +
+              " is within its references again: CALIBRATION_DRIFT cleared, production "
+              "may resume");
 }
 
 void Station::run(const std::atomic<bool>& stop) {
@@ -165,6 +206,7 @@ void Station::handle_runner_events(Clock::time_point now) {
     if (event.end.persisted) {
       // Data and RESULT_SEQ first, then the bits: one thread, so no read sees half of it.
       image_.publish_result(event.block);
+      if (event.check) on_check_part(*event.check, event.block.part_id);
       last_result_text_ =
           "last result seq " + std::to_string(event.block.seq) + " part " +
           std::to_string(event.block.part_id) + ": " +
@@ -265,6 +307,7 @@ std::string Station::status_text() const {
   if (!s.scanner_online) text += ", scanner offline";
   if (s.plc_comm_lost) text += ", PLC comm lost";
   if (s.result_stale) text += ", result not collected";
+  if (live_.calibration_drift) text += ", CALIBRATION DRIFT";
   return text + "; " + last_result_text_;
 }
 

@@ -48,6 +48,8 @@ class Station {
   /// The Modbus port actually bound.
   int port() const { return server_->port(); }
   std::uint16_t boot_id() const { return live_.boot_id; }
+  /// CALIBRATION_DRIFT: a check part was beyond its references and none has passed since.
+  bool calibration_drift() const { return live_.calibration_drift; }
   /// The report store, for readers on other threads (the result publisher).
   const ReportStore& store() const { return store_; }
   /// Sends READY=1 and runs step() until `stop` becomes true.
@@ -65,6 +67,8 @@ class Station {
   Station(const StationSettings& settings, ReportStore store, Log& log, NotifyFn notify);
   void restore_last_result();
   void handle_runner_events(Clock::time_point now);
+  void restore_calibration_drift();
+  void on_check_part(const v1::CheckResult& check, std::uint16_t part_id);
   void update_machine(Clock::time_point now);
   void log_event(MachineEvent event, const PlcControl& plc);
   void tick(Clock::time_point now);

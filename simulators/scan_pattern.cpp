@@ -106,11 +106,16 @@ std::vector<SimulatedProfile> laser_profiles(const analysis::PointCloud& surface
                                              const NoiseSettings& noise, std::mt19937& rng) {
   if (s.head_tilt_deg == 0.0) return head_profiles(surface, s, noise, rng);
   std::vector<SimulatedProfile> all;
+  constexpr double kRad = std::numbers::pi / 180.0;
   for (double sign : {1.0, -1.0}) {
+    // The head measures from where it is; the device converts as if it were where it was
+    // mounted, so a drifted second head's points come out turned by the drift.
+    const double mounted = sign * s.head_tilt_deg;
+    const double actual = mounted + (sign < 0.0 ? s.second_head_drift_deg : 0.0);
     LaserPatternSettings head = s;
-    head.calibration = tilted(s.calibration, sign * s.head_tilt_deg * std::numbers::pi / 180.0);
+    head.calibration = tilted(s.calibration, actual * kRad);
     auto profiles = head_profiles(surface, head, noise, rng);
-    to_primary(profiles, head.calibration, s.calibration);
+    to_primary(profiles, tilted(s.calibration, mounted * kRad), s.calibration);
     all.insert(all.end(), std::make_move_iterator(profiles.begin()),
                std::make_move_iterator(profiles.end()));
   }

@@ -33,6 +33,10 @@ struct LaserPatternSettings {
   /// the primary head's frame (the device merges them); 0: the one head of `calibration`.
   /// A part's walls parallel to the view give no return to one head looking straight down.
   double head_tilt_deg = 0.0;
+  /// With two heads: the second head turned on its mount by this much beyond head_tilt_deg,
+  /// about the motion axis, while the device still merges its readings as mounted (a head
+  /// that drifted since the calibration; its points turn against the first head's). 0: none.
+  double second_head_drift_deg = 0.0;
 };
 
 struct ProbePatternSettings {

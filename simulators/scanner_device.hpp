@@ -66,6 +66,8 @@ class ScannerDevice {
   /// Replaces the faults of this device (a fault campaign arms one per scan without a
   /// replug). Fractions count the frames of the next scan that starts, or of the running one.
   void arm_faults(const DeviceFaults& faults) { settings_.faults = faults; }
+  /// Replaces the laser pattern (the heads' mounts) from the next scan on: a head that moved.
+  void set_laser_pattern(const LaserPatternSettings& laser) { settings_.laser = laser; }
 
   bool scanning() const { return scanning_; }
   std::uint32_t scans_started() const { return scan_id_; }

@@ -189,6 +189,12 @@ void EmulatedUsbScanner::arm_faults(const DeviceFaults& faults) {
   if (impl_->device && impl_->plugged) impl_->device->arm_faults(faults);
 }
 
+void EmulatedUsbScanner::set_laser_pattern(const LaserPatternSettings& laser) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->device_settings.laser = laser;
+  if (impl_->device && impl_->plugged) impl_->device->set_laser_pattern(laser);
+}
+
 bool EmulatedUsbScanner::plugged() const {
   std::lock_guard lock(impl_->mutex);
   return impl_->plugged;

@@ -61,6 +61,9 @@ class EmulatedUsbScanner {
   /// Arms `faults` on the device plugged in now, without a replug (ScannerDevice::arm_faults):
   /// each fires once, in the next scan. No effect while unplugged; plug() arms set_faults().
   void arm_faults(const DeviceFaults& faults);
+  /// Replaces the laser pattern (head mounts, ScannerDevice::set_laser_pattern) of the device
+  /// plugged in now, from its next scan on, and of every later plug(): a head that moved.
+  void set_laser_pattern(const LaserPatternSettings& laser);
   bool plugged() const;
   /// The testbed root: UMOCKDEV_DIR for a child process.
   std::string root_dir() const;

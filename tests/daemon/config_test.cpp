@@ -123,6 +123,44 @@ TEST_F(ConfigTest, PartCatalogueErrors) {
   EXPECT_NE(zero.message().find("parts[0].part_id: 0 is not in 1..65535"), std::string::npos);
 }
 
+// check_part { } (docs/calibration.md): its references go to the runner as written.
+TEST_F(ConfigTest, CheckPartIsAppliedWithItsReferences) {
+  auto none = parse(kMinimal);
+  ASSERT_TRUE(none.ok()) << none.message();
+  EXPECT_FALSE(none->station.runner.check_part.has_value());
+  auto s = parse(std::string(kMinimal) +
+                 "check_part { part_id: 3\n"
+                 "  reference { characteristic: \"bend 2 springback\" value: 0.4 limit: 0.1 }\n"
+                 "  reference { characteristic: \"pose rotation z\" value: 0 limit: 0.05 } }\n");
+  ASSERT_TRUE(s.ok()) << s.message();
+  ASSERT_TRUE(s->station.runner.check_part.has_value());
+  EXPECT_EQ(s->station.runner.check_part->part_id(), 3);
+  ASSERT_EQ(s->station.runner.check_part->reference_size(), 2);
+  EXPECT_DOUBLE_EQ(s->station.runner.check_part->reference(1).limit(), 0.05);
+}
+
+TEST_F(ConfigTest, CheckPartErrorsNameTheField) {
+  const auto error = [&](const std::string& section) {
+    auto s = parse(std::string(kMinimal) + "check_part {\n" + section + "\n}\n");
+    EXPECT_FALSE(s.ok()) << section;
+    return s.ok() ? std::string() : s.message();
+  };
+  const std::string ref = "part_id: 3 reference { characteristic: \"bend 1 springback\" ";
+  EXPECT_NE(error("part_id: 4").find("check_part.part_id: 4 is not a part_id of the catalogue"),
+            std::string::npos);
+  EXPECT_NE(error("part_id: 3").find("check_part: no reference"), std::string::npos);
+  EXPECT_NE(error(ref + "value: 0.4 limit: 0 }").find("reference[0].limit: 0 is not a positive"),
+            std::string::npos);
+  EXPECT_NE(error(ref + "value: nan limit: 0.1 }").find("reference[0].value: nan is not a number"),
+            std::string::npos);
+  EXPECT_NE(error("part_id: 3 reference { value: 1 limit: 1 }")
+                .find("check_part.reference[0].characteristic: is empty"),
+            std::string::npos);
+  EXPECT_NE(error(ref + "value: 0.4 limit: 0.1 }\n" + ref.substr(11) + "value: 0.5 limit: 0.1 }")
+                .find("reference[1].characteristic: 'bend 1 springback' appears twice"),
+            std::string::npos);
+}
+
 // Paths the filesystem refuses to look at (found by fuzz_daemon_config: a 4 KB cad_file made
 // std::filesystem throw ENAMETOOLONG out of the parser): each is a clear config error naming
 // its field, for the part catalogue and for the MQTT files alike.

@@ -27,7 +27,7 @@ class RunnerTest : public ::testing::Test {
               if (fail_analysis_) return *fail_analysis_;
               return testing::plane_analysis(scan, 0.1);
             },
-            store_, log_, RunnerSettings{"test-station", 0.05}) {}
+            store_, log_, RunnerSettings{"test-station", 0.05, {}}) {}
 
   /// Starts a job and waits (poll on wake_fd) until it finished; returns the kFinished event.
   RunnerEvent run_job(std::uint64_t record, std::uint16_t part) {

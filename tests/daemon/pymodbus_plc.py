@@ -109,11 +109,11 @@ class Plc:
 
 def check_live_block(plc):
     live = plc.input_registers(0, 13)
-    check(live[MAP_VERSION] == 3, "MAP_VERSION %d, this client is written for 3" % live[0])
+    check(live[MAP_VERSION] == 4, "MAP_VERSION %d, this client is written for 4" % live[0])
     check(live[BOOT_ID] != 0, "BOOT_ID is never 0")
     check(live[ENDIAN_PROBE:ENDIAN_PROBE + 2] == [0x0102, 0x0304], "endianness probe (ABCD)")
     mirror = plc.holding_registers(10, 13)  # FC03 copy of input registers 0-12
-    check(mirror[MAP_VERSION] == 3 and mirror[BOOT_ID] == live[BOOT_ID], "live mirror at 10")
+    check(mirror[MAP_VERSION] == 4 and mirror[BOOT_ID] == live[BOOT_ID], "live mirror at 10")
     return live
 
 

@@ -78,5 +78,31 @@ TEST(ResultSummaryTest, EmptyReportAndNonFiniteNumbersStayValidJson) {
   EXPECT_EQ(s.fields().count("deviation"), 0u);
 }
 
+// A check part's result carries its comparison (docs/plant-integration.md); others do not.
+TEST(ResultSummaryTest, CheckPartResultCarriesCalibrationDrift) {
+  v1::InspectionReport r;
+  EXPECT_EQ(parse(result_summary_json(r, {})).fields().count("check"), 0u);
+  v1::CheckResult* check = r.mutable_check();
+  check->set_drift(true);
+  v1::CheckItem* moved = check->add_items();
+  moved->set_characteristic("bend 2 springback");
+  moved->set_reference(0.4);
+  moved->set_limit(0.1);
+  moved->set_measured(0.625);
+  moved->set_beyond(true);
+  check->add_items()->set_characteristic("pose rotation z");  // not measured
+  const auto s = parse(result_summary_json(r, {}));
+  const auto& c = s.fields().at("check").struct_value().fields();
+  EXPECT_TRUE(c.at("calibration_drift").bool_value());
+  const auto& items = c.at("items").list_value();
+  ASSERT_EQ(items.values_size(), 2);
+  const auto& first = items.values(0).struct_value().fields();
+  EXPECT_EQ(first.at("characteristic").string_value(), "bend 2 springback");
+  EXPECT_EQ(first.at("measured").number_value(), 0.625);
+  EXPECT_EQ(first.at("limit").number_value(), 0.1);
+  EXPECT_TRUE(first.at("beyond").bool_value());
+  EXPECT_EQ(items.values(1).struct_value().fields().count("measured"), 0u);
+}
+
 }  // namespace
 }  // namespace springscan::daemon

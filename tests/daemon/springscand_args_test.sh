@@ -41,6 +41,18 @@ config "$src/demo/hat-profile.step" ""
 "$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
 [[ $rc == 0 ]] || fail "--check of a good config: exit $rc: $(cat "$tmp/out")"
 grep -q "part 1 (demo): .*hat-profile.step loads: .* 4 bends" "$tmp/out" || fail "--check did not load the CAD: $(cat "$tmp/out")"
+grep -q "calibration in force: the scanner's default mount, no record of springscan calibrate" "$tmp/out" || fail "--check did not name the calibration: $(cat "$tmp/out")"
+grep -q "no check part" "$tmp/out" || fail "--check did not say there is no check part: $(cat "$tmp/out")"
+
+# The calibration in force (the record springscan calibrate writes, docs/calibration.md) and
+# the check part, as --check names them.
+config "$src/demo/hat-profile.step" ""
+sed -i 's|^scanner { kind: LASER_LINE }|scanner { kind: LASER_LINE calibration { created_utc: "2026-12-06T21:30:00Z" artefact_file: "/etc/springscan/artefact.step" heads { name: "head_a.ply" } heads { name: "head_b.ply" } } }|' "$tmp/c.textproto"
+echo 'check_part { part_id: 1 reference { characteristic: "bend 1 springback" value: 0.4 limit: 0.05 } }' >>"$tmp/c.textproto"
+"$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
+[[ $rc == 0 ]] || fail "--check with a calibration record and a check part: exit $rc: $(cat "$tmp/out")"
+grep -q "calibration in force: made 2026-12-06T21:30:00Z by springscan calibrate from artefact /etc/springscan/artefact.step, 2 head(s): head_a.ply, head_b.ply" "$tmp/out" || fail "--check did not name the calibration record: $(cat "$tmp/out")"
+grep -q "check part: part 1, 1 reference(s)" "$tmp/out" || fail "--check did not name the check part: $(cat "$tmp/out")"
 
 config "$src/demo/hat-profile.step" "settings { registration { max_iterations: -3 } }"
 "$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
