@@ -79,4 +79,4 @@ echo 'http { address: "localhost" }' >>"$tmp/c.textproto"
 "$bin" --check --config "$tmp/c.textproto" >"$tmp/out" 2>&1; rc=$?
 [[ $rc == 2 ]] || fail "--check of a bad http address: exit $rc"
 grep -q "c.textproto:6:.*http.address: 'localhost' is not an IPv4 address" "$tmp/out" || fail "bad http address not named: $(cat "$tmp/out")"
-echo "springscand arguments: 10 checks passed"
+echo "springscand arguments: 12 checks passed"
