@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -41,22 +42,6 @@ std::vector<Vec3> scaled(const std::vector<Vec3>& points, const MotionScale& s) 
   out.reserve(points.size());
   for (const Vec3& p : points) out.push_back(s.apply(p));
   return out;
-}
-
-// Pairs on the exact artefact surface: the foot and normal of the closest point.
-IcpPairSearch exact_pairs(const SurfaceDistance& exact) {
-  return [&exact](const std::vector<Vec3>& source, const Transform& T, std::size_t begin,
-                  std::size_t end, std::vector<IcpPair>& pairs) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const Vec3 q = T * source[i];
-      const SurfaceHit hit = exact.closest(q);
-      IcpPair& p = pairs[i];
-      p.point = hit.foot;
-      p.normal = hit.normal;
-      p.squared_distance_mm2 = (q - hit.foot).squaredNorm();
-      p.valid = std::isfinite(hit.signed_distance_mm);
-    }
-  };
 }
 
 /// The residuals at the final pose and the point-to-plane normal matrix of the inliers.
@@ -177,7 +162,9 @@ std::optional<Error> fit_rounds(const std::vector<Vec3>& raw, const PartModel& a
                                 MotionScale& scale, HeadCalibration& out) {
   IcpSettings icp_settings = settings.icp;
   icp_settings.threads = settings.threads;
-  const IcpPairSearch pairs = exact_pairs(*artefact.distance);
+  // Points only, no distance limit: outliers are the robust kernel's (settings.icp).
+  static const std::vector<Vec3> kNoNormals;
+  const IcpPairSearch pairs = exact_surface_pairs(*artefact.distance, kNoNormals, 0.0);
   Eigen::MatrixXd H;
   Eigen::VectorXd g;
   for (;;) {

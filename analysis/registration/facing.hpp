@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "analysis/core/kdtree.hpp"
+#include "analysis/core/part_model.hpp"
 #include "analysis/registration/icp.hpp"
 
 namespace springscan::analysis {
@@ -43,6 +44,13 @@ double facing_squared_distance(const KdTree& tree, const std::vector<Vec3>& norm
 IcpPairSearch nearest_facing_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
                                    const std::vector<Vec3>& source_normals, double max_distance_mm,
                                    double min_dot = 0.0);
+
+/// ICP pairs on the exact surface: the foot and normal of the closest point, within
+/// `max_distance_mm` (0: no limit); with `source_normals` (a one-sided scan of a solid) only a
+/// foot whose normal faces the point's way, as nearest_facing_pairs does on samples; empty: any
+/// foot. Holds references to `exact` and `source_normals`.
+IcpPairSearch exact_surface_pairs(const SurfaceDistance& exact,
+                                  const std::vector<Vec3>& source_normals, double max_distance_mm);
 
 /// An evenly strided sample of points with their normals picked alike (strided_sample picks by
 /// position in the vector only); `normals` empty when the source has none (no facing rule).

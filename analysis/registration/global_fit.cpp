@@ -110,30 +110,6 @@ Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model
 
 namespace {
 
-// Pairs on the exact surface: the foot and normal of the closest point, within the ICP's
-// correspondence distance; with normals (a one-sided scan of a solid) only a foot whose normal
-// faces the point's way (the facing rule, registration/facing.hpp).
-IcpPairSearch exact_surface_pairs(const SurfaceDistance& exact, const std::vector<Vec3>& normals,
-                                  double max_distance_mm) {
-  const double limit2 = max_distance_mm > 0.0 ? max_distance_mm * max_distance_mm
-                                              : std::numeric_limits<double>::infinity();
-  return
-      [&exact, &normals, limit2](const std::vector<Vec3>& source, const Transform& T,
-                                 std::size_t begin, std::size_t end, std::vector<IcpPair>& pairs) {
-        for (std::size_t i = begin; i < end; ++i) {
-          const Vec3 q = T * source[i];
-          const SurfaceHit hit = exact.closest(q);
-          IcpPair& p = pairs[i];
-          p.point = hit.foot;
-          p.normal = hit.normal;
-          p.squared_distance_mm2 = (q - hit.foot).squaredNorm();
-          const Vec3 n = normals.empty() ? Vec3::Zero() : Vec3(T.linear() * normals[i]);
-          p.valid = std::isfinite(hit.signed_distance_mm) && p.squared_distance_mm2 <= limit2 &&
-                    (n.isZero() || hit.normal.dot(n) > 0.0);
-        }
-      };
-}
-
 Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
                                       const std::vector<Vec3>& scan_normals,
                                       const SurfaceDistance& exact, const Transform& start,
