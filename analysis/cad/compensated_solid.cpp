@@ -1,0 +1,366 @@
+// The compensated die surface (compensated_solid.hpp): sample every face, edge and vertex, move
+// the samples by the field, refit (compensated_fit.cpp) and rebuild the shape with the same
+// topology through BRepTools_Modifier.
+#include "analysis/cad/compensated_solid.hpp"
+
+#include <BRepAdaptor_Curve.hxx>
+#include <BRepAdaptor_Surface.hxx>
+#include <BRepCheck_Analyzer.hxx>
+#include <BRepLib.hxx>
+#include <BRepTools.hxx>
+#include <BRepTools_Modification.hxx>
+#include <BRepTools_Modifier.hxx>
+#include <BRepTopAdaptor_FClass2d.hxx>
+#include <BRep_Tool.hxx>
+#include <Standard_Failure.hxx>
+#include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
+#include <algorithm>
+#include <cstdio>
+
+#include "analysis/cad/compensated_internal.hpp"
+#include "analysis/cad/internal.hpp"
+#include "analysis/cad/segmentation.hpp"
+#include "analysis/core/kdtree.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+using compensated::FaceFit;
+using compensated::FaceSample;
+
+Vec3 v3(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
+
+struct EdgeData {
+  bool moved = false;         // has a 3-D curve (not degenerated)
+  std::vector<double> t;      // sample parameters on the 3-D curve
+  std::vector<int> index;     // the samples' indices into the point batch
+  std::vector<Vec3> points;   // moved samples
+  Handle(Geom_BSplineCurve) curve;
+  double deviation = 0.0;
+};
+
+struct FaceData {
+  std::vector<FaceSample> samples;  // inside grid samples, then boundary samples
+  std::vector<int> index;           // inside samples' indices into the point batch
+  Eigen::Vector4d box = Eigen::Vector4d::Zero();
+  bool seam = false;  // an edge bounds the face twice (a closed surface): never canonical
+  FaceFit fit;
+  CompensatedFace report;
+};
+
+// Everything sampled, then moved: the point batch the field is asked about once.
+struct Sampling {
+  TopTools_IndexedMapOfShape vertices, edges;
+  std::vector<Vec3> points;
+  std::vector<EdgeData> edge;
+  std::vector<FaceData> face;
+  std::vector<Vec3> offset;    // per point, after filling the uncovered ones
+  std::vector<bool> covered;
+  int add(const gp_Pnt& p) {
+    points.emplace_back(p.X(), p.Y(), p.Z());
+    return static_cast<int>(points.size()) - 1;
+  }
+};
+
+void sample_edges(Sampling& s, const CompensatedShapeSettings& settings) {
+  s.edge.resize(static_cast<std::size_t>(s.edges.Extent()));
+  const int n = std::max(settings.edge_samples, 8);
+  for (int i = 1; i <= s.edges.Extent(); ++i) {
+    const TopoDS_Edge& e = TopoDS::Edge(s.edges(i));
+    EdgeData& d = s.edge[static_cast<std::size_t>(i - 1)];
+    if (BRep_Tool::Degenerated(e) || !BRep_Tool::IsGeometric(e)) continue;
+    const BRepAdaptor_Curve curve(e);
+    d.moved = true;
+    for (int k = 0; k < n; ++k) {
+      const double t = curve.FirstParameter() +
+                       (curve.LastParameter() - curve.FirstParameter()) * k / (n - 1);
+      d.t.push_back(t);
+      d.index.push_back(s.add(curve.Value(t)));
+    }
+  }
+}
+
+// The face's grid samples inside its trimming, over its (u, v) box.
+void sample_face(const TopoDS_Face& face, FaceData& d, Sampling& s,
+                 const CompensatedShapeSettings& settings) {
+  double u0, u1, v0, v1;
+  BRepTools::UVBounds(face, u0, u1, v0, v1);
+  d.box << u0, u1, v0, v1;
+  const BRepAdaptor_Surface surface(face);
+  const BRepTopAdaptor_FClass2d classifier(face, 1e-7);
+  const int n = std::max(settings.face_samples, 4);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double u = u0 + (u1 - u0) * i / (n - 1), v = v0 + (v1 - v0) * j / (n - 1);
+      const TopAbs_State state = classifier.Perform(gp_Pnt2d(u, v));
+      if (state != TopAbs_IN && state != TopAbs_ON) continue;
+      FaceSample sample;
+      sample.uv = {u, v};
+      sample.row = j;
+      sample.column = i;
+      d.samples.push_back(sample);
+      d.index.push_back(s.add(surface.Value(u, v)));
+    }
+  }
+  for (TopExp_Explorer x(face, TopAbs_EDGE); x.More(); x.Next())
+    d.seam = d.seam || BRep_Tool::IsClosed(TopoDS::Edge(x.Current()), face);
+}
+
+// The field at every sample; an uncovered sample takes its nearest covered sample's offset.
+Expected<bool> ask_field(Sampling& s, const OffsetField& field) {
+  PointOffsets answer = field(s.points);
+  if (answer.offset.size() != s.points.size() || answer.covered.size() != s.points.size())
+    return fail(ErrorCode::kInternal, "compensated shape: the field answered " +
+                                          std::to_string(answer.offset.size()) + " offsets for " +
+                                          std::to_string(s.points.size()) + " points");
+  std::vector<Vec3> anchors;
+  std::vector<std::size_t> anchor_index;
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    if (!answer.covered[i]) continue;
+    if (!answer.offset[i].allFinite())
+      return fail("compensated shape: the field is not finite at a sample");
+    anchors.push_back(s.points[i]);
+    anchor_index.push_back(i);
+  }
+  if (anchors.empty()) return fail("compensated shape: the field covers no point of the CAD");
+  const KdTree tree(anchors);
+  for (std::size_t i = 0; i < s.points.size(); ++i) {
+    if (answer.covered[i]) continue;
+    const auto nearest = tree.nearest(s.points[i]);
+    answer.offset[i] = answer.offset[anchor_index[nearest->index]];
+  }
+  s.offset = std::move(answer.offset);
+  s.covered = std::move(answer.covered);
+  return true;
+}
+
+std::string describe(const CadFaceInfo& f) {
+  char text[160];
+  std::snprintf(text, sizeof text, "face %d (%s, %.1f mm2, centroid %.2f %.2f %.2f)", f.id,
+                f.type.c_str(), f.area_mm2, f.centroid.x(), f.centroid.y(), f.centroid.z());
+  return text;
+}
+
+// The face's boundary samples: every edge's moved samples at the edge's pcurve on the face.
+void add_boundary(const TopoDS_Face& face, FaceData& d, const Sampling& s) {
+  for (TopExp_Explorer x(face, TopAbs_EDGE); x.More(); x.Next()) {
+    const TopoDS_Edge& e = TopoDS::Edge(x.Current());
+    const EdgeData& edge = s.edge[static_cast<std::size_t>(s.edges.FindIndex(e) - 1)];
+    if (!edge.moved) continue;
+    double f, l;
+    const Handle(Geom2d_Curve) pcurve = BRep_Tool::CurveOnSurface(e, face, f, l);
+    if (pcurve.IsNull()) continue;
+    const double t0 = edge.t.front(), t1 = edge.t.back();
+    for (std::size_t k = 0; k < edge.t.size(); ++k) {
+      // Same-parameter edges share the range; map it anyway should a pcurve's range differ.
+      const double t = f + (l - f) * (edge.t[k] - t0) / (t1 - t0);
+      const gp_Pnt2d uv = pcurve->Value(t);
+      FaceSample sample;
+      sample.uv = {uv.X(), uv.Y()};
+      sample.moved = edge.points[k];
+      d.samples.push_back(sample);
+    }
+  }
+}
+
+// How far the refit lies from each moved sample: at the sample's own (u, v) for a B-spline in the
+// old parameters, at its projection for a plane or cylinder.
+void face_deviations(FaceData& d, std::vector<double>& all) {
+  for (const FaceSample& s : d.samples) {
+    const Eigen::Vector2d uv = d.fit.same_parameters ? s.uv : d.fit.uv_of(s.moved);
+    const double e = (v3(d.fit.surface->Value(uv.x(), uv.y()).XYZ()) - s.moved).norm();
+    d.report.max_deviation_mm = std::max(d.report.max_deviation_mm, e);
+    all.push_back(e);
+  }
+}
+
+// The new geometry of every face, edge and vertex, handed to BRepTools_Modifier, which rebuilds
+// the shape around it with the same topology.
+class FieldModification : public BRepTools_Modification {
+ public:
+  FieldModification(const Sampling& s, const TopTools_IndexedMapOfShape& faces,
+                    std::vector<Vec3> vertex_points)
+      : s_(s), faces_(faces), vertex_points_(std::move(vertex_points)) {}
+
+  Standard_Boolean NewSurface(const TopoDS_Face& f, Handle(Geom_Surface)& surface,
+                              TopLoc_Location& location, Standard_Real& tolerance,
+                              Standard_Boolean& reverse_wires,
+                              Standard_Boolean& reverse_face) override {
+    const FaceData& d = face(f);
+    surface = d.fit.surface;
+    location = TopLoc_Location();
+    tolerance = std::max(BRep_Tool::Tolerance(f), d.report.max_deviation_mm);
+    reverse_wires = reverse_face = Standard_False;
+    return Standard_True;
+  }
+  Standard_Boolean NewCurve(const TopoDS_Edge& e, Handle(Geom_Curve)& curve,
+                            TopLoc_Location& location, Standard_Real& tolerance) override {
+    const EdgeData& d = edge(e);
+    if (!d.moved) return Standard_False;
+    curve = d.curve;
+    location = TopLoc_Location();
+    tolerance = std::max(BRep_Tool::Tolerance(e), d.deviation);
+    return Standard_True;
+  }
+  Standard_Boolean NewPoint(const TopoDS_Vertex& v, gp_Pnt& point,
+                            Standard_Real& tolerance) override {
+    const Vec3& p = vertex_points_[static_cast<std::size_t>(s_.vertices.FindIndex(v) - 1)];
+    point.SetCoord(p.x(), p.y(), p.z());
+    tolerance = BRep_Tool::Tolerance(v);
+    return Standard_True;
+  }
+  Standard_Boolean NewCurve2d(const TopoDS_Edge& e, const TopoDS_Face& f, const TopoDS_Edge&,
+                              const TopoDS_Face&, Handle(Geom2d_Curve)& curve,
+                              Standard_Real& tolerance) override {
+    const FaceData& d = face(f);
+    const EdgeData& ed = edge(e);
+    double first, last;
+    const Handle(Geom2d_Curve) old = BRep_Tool::CurveOnSurface(e, f, first, last);
+    if (old.IsNull()) return Standard_False;
+    tolerance = BRep_Tool::Tolerance(e);
+    if (d.fit.same_parameters || !ed.moved) {
+      curve = Handle(Geom2d_Curve)::DownCast(old->Copy());
+      return Standard_True;
+    }
+    // A plane or cylinder in new parameters: the trimming curve follows the moved edge.
+    std::vector<Eigen::Vector2d> uv;
+    std::vector<double> t;
+    const double t0 = ed.t.front(), t1 = ed.t.back();
+    for (std::size_t k = 0; k < ed.t.size(); ++k) {
+      uv.push_back(d.fit.uv_of(ed.points[k]));
+      t.push_back(first + (last - first) * (ed.t[k] - t0) / (t1 - t0));
+    }
+    curve = compensated::fit_curve_2d(t, uv);
+    return Standard_True;
+  }
+  Standard_Boolean NewParameter(const TopoDS_Vertex& v, const TopoDS_Edge& e,
+                                Standard_Real& parameter, Standard_Real& tolerance) override {
+    parameter = BRep_Tool::Parameter(v, e);  // the curves keep their edges' parameters
+    tolerance = BRep_Tool::Tolerance(v);
+    return Standard_True;
+  }
+  GeomAbs_Shape Continuity(const TopoDS_Edge& e, const TopoDS_Face& f1, const TopoDS_Face& f2,
+                           const TopoDS_Edge&, const TopoDS_Face&, const TopoDS_Face&) override {
+    return BRep_Tool::HasContinuity(e, f1, f2) ? BRep_Tool::Continuity(e, f1, f2) : GeomAbs_C0;
+  }
+
+ private:
+  const FaceData& face(const TopoDS_Face& f) const {
+    return s_.face[static_cast<std::size_t>(faces_.FindIndex(f) - 1)];
+  }
+  const EdgeData& edge(const TopoDS_Edge& e) const {
+    return s_.edge[static_cast<std::size_t>(s_.edges.FindIndex(e) - 1)];
+  }
+  const Sampling& s_;
+  const TopTools_IndexedMapOfShape& faces_;
+  std::vector<Vec3> vertex_points_;
+};
+
+double percentile_95(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(0.95 * static_cast<double>(values.size() - 1));
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
+  return values[k];
+}
+
+// Samples, asks the field, checks coverage and refits every edge and face.
+Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& s,
+                     const CompensatedShapeSettings& settings, CompensatedShape& out,
+                     std::vector<double>& deviations) {
+  const CadShape::Impl& impl = shape.impl();
+  TopExp::MapShapes(impl.shape, TopAbs_VERTEX, s.vertices);
+  TopExp::MapShapes(impl.shape, TopAbs_EDGE, s.edges);
+  for (int v = 1; v <= s.vertices.Extent(); ++v) s.add(BRep_Tool::Pnt(TopoDS::Vertex(s.vertices(v))));
+  sample_edges(s, settings);
+  s.face.resize(static_cast<std::size_t>(impl.faces.Extent()));
+  for (int f = 0; f < impl.faces.Extent(); ++f) sample_face(impl.face(f), s.face[f], s, settings);
+  if (auto asked = ask_field(s, field); !asked) return asked.error();
+  auto moved = [&](int i) { return Vec3(s.points[i] + s.offset[i]); };
+  for (const Vec3& o : s.offset) out.max_offset_mm = std::max(out.max_offset_mm, o.norm());
+  for (EdgeData& e : s.edge) {
+    if (!e.moved) continue;
+    for (const int i : e.index) e.points.push_back(moved(i));
+    e.curve = compensated::fit_curve(e.t, e.points, e.deviation);
+    out.max_deviation_mm = std::max(out.max_deviation_mm, e.deviation);
+    for (std::size_t k = 0; k < e.t.size(); ++k)
+      deviations.push_back((v3(e.curve->Value(e.t[k]).XYZ()) - e.points[k]).norm());
+  }
+  const std::vector<CadFaceInfo> info = describe_faces(shape);
+  for (int f = 0; f < impl.faces.Extent(); ++f) {
+    FaceData& d = s.face[static_cast<std::size_t>(f)];
+    d.report.id = f;
+    std::size_t covered = 0;
+    for (std::size_t k = 0; k < d.index.size(); ++k) {
+      d.samples[k].moved = moved(d.index[k]);
+      covered += s.covered[static_cast<std::size_t>(d.index[k])] ? 1 : 0;
+      d.report.max_offset_mm = std::max(d.report.max_offset_mm, s.offset[d.index[k]].norm());
+    }
+    d.report.coverage =
+        d.index.empty() ? 1.0 : static_cast<double>(covered) / static_cast<double>(d.index.size());
+    if (d.report.coverage < settings.min_face_coverage)
+      return fail("compensated shape: the deformation field does not cover " +
+                  describe(info[static_cast<std::size_t>(f)]) + ": " +
+                  std::to_string(covered) + " of its " + std::to_string(d.index.size()) +
+                  " samples have a deformation vector nearby");
+    add_boundary(impl.face(f), d, s);
+    if (d.samples.empty()) return fail(ErrorCode::kInternal, "compensated shape: face " +
+                                                                 std::to_string(f) + " has no samples");
+    d.fit = compensated::fit_face(impl.face(f), d.samples, d.box, !d.seam, settings);
+    d.report.surface = d.fit.kind;
+    face_deviations(d, deviations);
+    out.max_deviation_mm = std::max(out.max_deviation_mm, d.report.max_deviation_mm);
+    if (d.report.max_deviation_mm > settings.max_fit_deviation_mm)
+      return fail(ErrorCode::kAnalysisFailed,
+                  "compensated shape: the refit of " + describe(info[static_cast<std::size_t>(f)]) +
+                      " lies " + std::to_string(d.report.max_deviation_mm) +
+                      " mm from its moved samples (limit " +
+                      std::to_string(settings.max_fit_deviation_mm) + " mm)");
+    out.faces.push_back(d.report);
+  }
+  return true;
+}
+
+}  // namespace
+
+Expected<CompensatedShape> compensated_shape(const CadShape& shape, const OffsetField& field,
+                                             const CompensatedShapeSettings& settings) {
+  if (shape.empty()) return fail("compensated shape: the CAD shape is empty");
+  if (!field) return fail("compensated shape: no deformation field");
+  try {
+    CompensatedShape out;
+    Sampling s;
+    std::vector<double> deviations;
+    if (auto done = refit(shape, field, s, settings, out, deviations); !done) return done.error();
+    out.p95_deviation_mm = percentile_95(deviations);
+    std::vector<Vec3> vertex_points;
+    for (int v = 0; v < s.vertices.Extent(); ++v)
+      vertex_points.push_back(s.points[static_cast<std::size_t>(v)] + s.offset[static_cast<std::size_t>(v)]);
+    const Handle(FieldModification) modification =
+        new FieldModification(s, shape.impl().faces, std::move(vertex_points));
+    BRepTools_Modifier modifier(shape.impl().shape, modification);
+    if (!modifier.IsDone())
+      return fail(ErrorCode::kAnalysisFailed, "compensated shape: the shape could not be rebuilt");
+    const TopoDS_Shape result = modifier.ModifiedShape(shape.impl().shape);
+    // The trimming curves were refitted apart from the edges: tolerances follow their gaps.
+    BRepLib::SameParameter(result, 1e-5, Standard_True);
+    BRepLib::UpdateTolerances(result, Standard_True);
+    out.valid = BRepCheck_Analyzer(result).IsValid() == Standard_True;
+    if (!out.valid)
+      return fail(ErrorCode::kAnalysisFailed,
+                  "compensated shape: OpenCASCADE's checker (BRepCheck_Analyzer) finds the moved "
+                  "shape invalid");
+    CadLoadReport report;
+    report.file = "(compensated)";
+    report.format = "built";
+    auto moved = make_cad_shape(result, report, CadImportSettings{});
+    if (!moved) return moved.error();
+    out.shape = std::move(moved).value();
+    return out;
+  } catch (const Standard_Failure& e) {
+    return fail(ErrorCode::kAnalysisFailed,
+                describe_occt_failure("compensated shape", e.GetMessageString()));
+  }
+}
+
+}  // namespace springscan::analysis
