@@ -19,6 +19,7 @@ int model_main(int argc, char** argv);
 int trend_main(int argc, char** argv);
 int msa_main(int argc, char** argv);
 int calibrate_main(int argc, char** argv);
+int compensate_main(int argc, char** argv);
 
 namespace {
 
@@ -33,6 +34,8 @@ const Command kCommands[] = {
     {"trend", "control charts, Cp/Cpk and run rules over many reports (HTML)", trend_main},
     {"msa", "gauge capability studies, type 1 (Cg, Cgk) and type 3 (%GRR, ndc)", msa_main},
     {"calibrate", "fit each scanner head's transform to the calibration artefact", calibrate_main},
+    {"compensate", "the compensated die surface as STEP, from a report's deformation field",
+     compensate_main},
 };
 
 void print_usage() {

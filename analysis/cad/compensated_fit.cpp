@@ -1,17 +1,17 @@
 // The refits of moved faces and edges (compensated_internal.hpp): planes and cylinders that stay
 // canonical, least-squares cubic B-splines in the old parameters otherwise.
 #include <BRep_Tool.hxx>
+#include <Eigen/Eigenvalues>
 #include <Geom2d_BSplineCurve.hxx>
+#include <GeomAdaptor_Surface.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <Geom_CylindricalSurface.hxx>
 #include <Geom_Plane.hxx>
-#include <GeomAdaptor_Surface.hxx>
 #include <TColStd_Array1OfInteger.hxx>
 #include <TColStd_Array1OfReal.hxx>
 #include <TColgp_Array1OfPnt.hxx>
 #include <TColgp_Array1OfPnt2d.hxx>
 #include <TColgp_Array2OfPnt.hxx>
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -23,6 +23,7 @@ namespace springscan::analysis::compensated {
 namespace {
 
 constexpr int kDegree = 3;
+constexpr int kMaxSpans = 32;  // per direction: 35 x 35 poles at most
 
 Vec3 v3(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
 gp_Pnt pnt(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
@@ -101,9 +102,7 @@ Eigen::MatrixXd solve_surface(const Knots& ku, const Knots& kv,
 }
 
 Handle(Geom_BSplineSurface) bspline_surface(const TopoDS_Face&, const std::vector<FaceSample>& s,
-                                            const Eigen::Vector4d& box,
-                                            const CompensatedShapeSettings& settings) {
-  const int spans = std::max(1, settings.face_spans);
+                                            const Eigen::Vector4d& box, int spans) {
   const Knots ku{box[0], box[1], spans}, kv{box[2], box[3], spans};
   const Eigen::MatrixXd poles = solve_surface(ku, kv, s);
   TColgp_Array2OfPnt array(1, ku.poles(), 1, kv.poles());
@@ -132,6 +131,7 @@ bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s, double toler
   if (normal.dot(old_normal) < 0.0) normal = -normal;
   double worst = 0.0;
   for (const auto& p : s) worst = std::max(worst, std::abs(normal.dot(p.moved - mean)));
+  fit.canonical_deviation_mm = worst;
   if (!(worst <= tolerance)) return false;
   Vec3 x = v3(old.XDirection().XYZ());
   x = (x - x.dot(normal) * normal).normalized();
@@ -187,6 +187,7 @@ bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double to
     worst = std::max(worst, std::abs((w - w.dot(axis) * axis).norm() - radius));
     mid += p.moved;
   }
+  fit.canonical_deviation_mm = worst;
   if (!(worst <= tolerance)) return false;
   mid /= static_cast<double>(s.size());
   Vec3 x = mid - center;
@@ -228,12 +229,17 @@ FaceFit fit_face(const TopoDS_Face& face, const std::vector<FaceSample>& samples
     return fit;
   }
   fit.kind = "bspline";
-  fit.surface = bspline_surface(face, samples, uv_box, settings);
-  for (const auto& s : samples) {
-    const Vec3 on = v3(fit.surface->Value(s.uv.x(), s.uv.y()).XYZ());
-    fit.max_deviation_mm = std::max(fit.max_deviation_mm, (on - s.moved).norm());
+  // Finer spans until the refit follows the samples (a field that turns at a bend crosses a
+  // sheet's end face: a kink no coarse spline follows).
+  for (int spans = std::max(1, settings.face_spans);; spans *= 2) {
+    fit.surface = bspline_surface(face, samples, uv_box, spans);
+    fit.max_deviation_mm = 0.0;
+    for (const auto& s : samples) {
+      const Vec3 on = v3(fit.surface->Value(s.uv.x(), s.uv.y()).XYZ());
+      fit.max_deviation_mm = std::max(fit.max_deviation_mm, (on - s.moved).norm());
+    }
+    if (fit.max_deviation_mm <= settings.bspline_tolerance_mm || spans >= kMaxSpans) return fit;
   }
-  return fit;
 }
 
 namespace {
@@ -275,12 +281,13 @@ Handle(Geom_BSplineCurve) fit_curve(const std::vector<double>& t, const std::vec
   Handle(Geom_BSplineCurve) curve = new Geom_BSplineCurve(array, knots, mults, kDegree);
   max_deviation_mm = 0.0;
   for (std::size_t i = 0; i < t.size(); ++i)
-    max_deviation_mm = std::max(max_deviation_mm, (v3(curve->Value(t[i]).XYZ()) - points[i]).norm());
+    max_deviation_mm =
+        std::max(max_deviation_mm, (v3(curve->Value(t[i]).XYZ()) - points[i]).norm());
   return curve;
 }
 
-Handle(Geom2d_Curve) fit_curve_2d(const std::vector<double>& t,
-                                  const std::vector<Eigen::Vector2d>& uv) {
+Handle(Geom2d_Curve)
+    fit_curve_2d(const std::vector<double>& t, const std::vector<Eigen::Vector2d>& uv) {
   const Knots k = curve_knots(t);
   const Eigen::MatrixXd poles = solve_curve<2>(k, t, uv);
   TColgp_Array1OfPnt2d array(1, k.poles());

@@ -30,6 +30,7 @@ struct FaceFit {
   /// false: a canonical surface, the pcurves are mapped through uv_of().
   bool same_parameters = true;
   double max_deviation_mm = 0.0;
+  double canonical_deviation_mm = -1.0;            ///< of the plane/cylinder tried (-1: none tried)
   Eigen::Vector2d uv_of(const Vec3& moved) const;  ///< canonical surfaces only
   // Canonical frame (plane: origin, x, y; cylinder: axis point, x, y, axis, radius).
   Vec3 origin = Vec3::Zero(), x = Vec3::UnitX(), y = Vec3::UnitY(), z = Vec3::UnitZ();
@@ -50,7 +51,7 @@ Handle(Geom_BSplineCurve) fit_curve(const std::vector<double>& parameters,
                                     const std::vector<Vec3>& points, double& max_deviation_mm);
 
 /// A 2-D B-spline curve through `uv` at `parameters`.
-Handle(Geom2d_Curve) fit_curve_2d(const std::vector<double>& parameters,
-                                  const std::vector<Eigen::Vector2d>& uv);
+Handle(Geom2d_Curve)
+    fit_curve_2d(const std::vector<double>& parameters, const std::vector<Eigen::Vector2d>& uv);
 
 }  // namespace springscan::analysis::compensated

@@ -32,10 +32,10 @@ using compensated::FaceSample;
 Vec3 v3(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
 
 struct EdgeData {
-  bool moved = false;         // has a 3-D curve (not degenerated)
-  std::vector<double> t;      // sample parameters on the 3-D curve
-  std::vector<int> index;     // the samples' indices into the point batch
-  std::vector<Vec3> points;   // moved samples
+  bool moved = false;        // has a 3-D curve (not degenerated)
+  std::vector<double> t;     // sample parameters on the 3-D curve
+  std::vector<int> index;    // the samples' indices into the point batch
+  std::vector<Vec3> points;  // moved samples
   Handle(Geom_BSplineCurve) curve;
   double deviation = 0.0;
 };
@@ -55,7 +55,7 @@ struct Sampling {
   std::vector<Vec3> points;
   std::vector<EdgeData> edge;
   std::vector<FaceData> face;
-  std::vector<Vec3> offset;    // per point, after filling the uncovered ones
+  std::vector<Vec3> offset;  // per point, after filling the uncovered ones
   std::vector<bool> covered;
   int add(const gp_Pnt& p) {
     points.emplace_back(p.X(), p.Y(), p.Z());
@@ -73,8 +73,8 @@ void sample_edges(Sampling& s, const CompensatedShapeSettings& settings) {
     const BRepAdaptor_Curve curve(e);
     d.moved = true;
     for (int k = 0; k < n; ++k) {
-      const double t = curve.FirstParameter() +
-                       (curve.LastParameter() - curve.FirstParameter()) * k / (n - 1);
+      const double t =
+          curve.FirstParameter() + (curve.LastParameter() - curve.FirstParameter()) * k / (n - 1);
       d.t.push_back(t);
       d.index.push_back(s.add(curve.Value(t)));
     }
@@ -183,7 +183,7 @@ class FieldModification : public BRepTools_Modification {
                     std::vector<Vec3> vertex_points)
       : s_(s), faces_(faces), vertex_points_(std::move(vertex_points)) {}
 
-  Standard_Boolean NewSurface(const TopoDS_Face& f, Handle(Geom_Surface)& surface,
+  Standard_Boolean NewSurface(const TopoDS_Face& f, Handle(Geom_Surface) & surface,
                               TopLoc_Location& location, Standard_Real& tolerance,
                               Standard_Boolean& reverse_wires,
                               Standard_Boolean& reverse_face) override {
@@ -194,7 +194,7 @@ class FieldModification : public BRepTools_Modification {
     reverse_wires = reverse_face = Standard_False;
     return Standard_True;
   }
-  Standard_Boolean NewCurve(const TopoDS_Edge& e, Handle(Geom_Curve)& curve,
+  Standard_Boolean NewCurve(const TopoDS_Edge& e, Handle(Geom_Curve) & curve,
                             TopLoc_Location& location, Standard_Real& tolerance) override {
     const EdgeData& d = edge(e);
     if (!d.moved) return Standard_False;
@@ -211,7 +211,7 @@ class FieldModification : public BRepTools_Modification {
     return Standard_True;
   }
   Standard_Boolean NewCurve2d(const TopoDS_Edge& e, const TopoDS_Face& f, const TopoDS_Edge&,
-                              const TopoDS_Face&, Handle(Geom2d_Curve)& curve,
+                              const TopoDS_Face&, Handle(Geom2d_Curve) & curve,
                               Standard_Real& tolerance) override {
     const FaceData& d = face(f);
     const EdgeData& ed = edge(e);
@@ -271,7 +271,8 @@ Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& 
   const CadShape::Impl& impl = shape.impl();
   TopExp::MapShapes(impl.shape, TopAbs_VERTEX, s.vertices);
   TopExp::MapShapes(impl.shape, TopAbs_EDGE, s.edges);
-  for (int v = 1; v <= s.vertices.Extent(); ++v) s.add(BRep_Tool::Pnt(TopoDS::Vertex(s.vertices(v))));
+  for (int v = 1; v <= s.vertices.Extent(); ++v)
+    s.add(BRep_Tool::Pnt(TopoDS::Vertex(s.vertices(v))));
   sample_edges(s, settings);
   s.face.resize(static_cast<std::size_t>(impl.faces.Extent()));
   for (int f = 0; f < impl.faces.Extent(); ++f) sample_face(impl.face(f), s.face[f], s, settings);
@@ -300,14 +301,16 @@ Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& 
         d.index.empty() ? 1.0 : static_cast<double>(covered) / static_cast<double>(d.index.size());
     if (d.report.coverage < settings.min_face_coverage)
       return fail("compensated shape: the deformation field does not cover " +
-                  describe(info[static_cast<std::size_t>(f)]) + ": " +
-                  std::to_string(covered) + " of its " + std::to_string(d.index.size()) +
+                  describe(info[static_cast<std::size_t>(f)]) + ": " + std::to_string(covered) +
+                  " of its " + std::to_string(d.index.size()) +
                   " samples have a deformation vector nearby");
     add_boundary(impl.face(f), d, s);
-    if (d.samples.empty()) return fail(ErrorCode::kInternal, "compensated shape: face " +
-                                                                 std::to_string(f) + " has no samples");
+    if (d.samples.empty())
+      return fail(ErrorCode::kInternal,
+                  "compensated shape: face " + std::to_string(f) + " has no samples");
     d.fit = compensated::fit_face(impl.face(f), d.samples, d.box, !d.seam, settings);
     d.report.surface = d.fit.kind;
+    d.report.canonical_deviation_mm = d.fit.canonical_deviation_mm;
     face_deviations(d, deviations);
     out.max_deviation_mm = std::max(out.max_deviation_mm, d.report.max_deviation_mm);
     if (d.report.max_deviation_mm > settings.max_fit_deviation_mm)
@@ -335,7 +338,8 @@ Expected<CompensatedShape> compensated_shape(const CadShape& shape, const Offset
     out.p95_deviation_mm = percentile_95(deviations);
     std::vector<Vec3> vertex_points;
     for (int v = 0; v < s.vertices.Extent(); ++v)
-      vertex_points.push_back(s.points[static_cast<std::size_t>(v)] + s.offset[static_cast<std::size_t>(v)]);
+      vertex_points.push_back(s.points[static_cast<std::size_t>(v)] +
+                              s.offset[static_cast<std::size_t>(v)]);
     const Handle(FieldModification) modification =
         new FieldModification(s, shape.impl().faces, std::move(vertex_points));
     BRepTools_Modifier modifier(shape.impl().shape, modification);

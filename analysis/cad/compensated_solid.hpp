@@ -37,23 +37,28 @@ struct PointOffsets {
 using OffsetField = std::function<PointOffsets(const std::vector<Vec3>& points)>;
 
 struct CompensatedShapeSettings {
-  int face_samples = 21;    ///< grid samples per direction of each face (u and v)
-  int face_spans = 8;       ///< cubic spans per direction of a refitted B-spline face
-  int edge_samples = 41;    ///< samples along each edge
-  double canonical_tolerance_mm = 0.01;  ///< a moved plane/cylinder within this stays one
+  int face_samples = 21;  ///< grid samples per direction of each face (u and v)
+  int face_spans = 8;     ///< cubic spans per direction of a B-spline face (doubled up to 32
+                          ///< while the refit lies farther than bspline_tolerance_mm)
+  double bspline_tolerance_mm = 0.01;   ///< the B-spline refit's aim (max over its samples)
+  int edge_samples = 41;                ///< samples along each edge
+  double canonical_tolerance_mm = 0.1;  ///< a moved plane/cylinder within this stays one
   /// A face with fewer of its samples covered by the field is refused (the error names it);
   /// its other uncovered samples take the offset of the nearest covered sample.
   double min_face_coverage = 0.5;
-  double max_fit_deviation_mm = 0.05;  ///< a refit farther than this from its samples fails
+  double max_fit_deviation_mm = 0.15;  ///< a refit farther than this from its samples fails
 };
 
 /// One face of the result.
 struct CompensatedFace {
-  int id = 0;                  ///< face id, as in the input (and the output) shape
-  std::string surface;         ///< "plane", "cylinder" or "bspline"
+  int id = 0;                     ///< face id, as in the input (and the output) shape
+  std::string surface;            ///< "plane", "cylinder" or "bspline"
   double max_deviation_mm = 0.0;  ///< of the refit from the moved samples
   double max_offset_mm = 0.0;     ///< longest displacement applied on the face
   double coverage = 1.0;          ///< share of its samples the field covered
+  /// A plane or cylinder: how far the moved samples lie from the best one (-1: not tried, e.g.
+  /// a B-spline face); above canonical_tolerance_mm the face became a B-spline.
+  double canonical_deviation_mm = -1.0;
 };
 
 struct CompensatedShape {

@@ -1,11 +1,12 @@
 // STEP output of a CadShape, atomic (compensated_solid.hpp write_step_atomically).
+#include <unistd.h>
+
 #include <IFSelect_ReturnStatus.hxx>
 #include <Interface_Static.hxx>
 #include <STEPControl_Writer.hxx>
 #include <Standard_Failure.hxx>
 #include <filesystem>
 #include <system_error>
-#include <unistd.h>
 
 #include "analysis/cad/compensated_solid.hpp"
 #include "analysis/cad/internal.hpp"
@@ -38,8 +39,8 @@ Expected<bool> write_step_atomically(const CadShape& shape, const std::string& p
     if (writer.Transfer(shape.impl().shape, STEPControl_AsIs) != IFSelect_RetDone)
       return fail(ErrorCode::kAnalysisFailed, path + ": the shape could not be translated to STEP");
     if (writer.Write(scratch.c_str()) != IFSelect_RetDone)
-      return fail(ErrorCode::kIoError, path + ": could not write the STEP file (" +
-                                           scratch.string() + ")");
+      return fail(ErrorCode::kIoError,
+                  path + ": could not write the STEP file (" + scratch.string() + ")");
   } catch (const Standard_Failure& e) {
     return fail(ErrorCode::kAnalysisFailed, describe_occt_failure(path, e.GetMessageString()));
   }

@@ -1,6 +1,7 @@
 // Proto conversions of the matching and compensation stages (matching_proto.hpp).
 #include "analysis/messages/matching_proto.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -129,6 +130,35 @@ void to_proto(const DeformationField& field, v1::DeformationField* m) {
   m->set_total_cost(field.total_cost_mm2);
   m->set_optimality_certified(field.optimality_certified);
   m->set_nearest_neighbor_coverage(field.nearest_neighbor_coverage);
+}
+
+Expected<DeformationField> from_proto(const v1::DeformationField& m) {
+  DeformationField field;
+  field.method = m.method() == to_string(CorrespondenceMethod::kNearestNeighbor)
+                     ? CorrespondenceMethod::kNearestNeighbor
+                     : CorrespondenceMethod::kMinCostMatching;
+  field.refined = !m.refinement().empty();
+  field.vectors.reserve(static_cast<std::size_t>(m.vectors_size()));
+  for (int i = 0; i < m.vectors_size(); ++i) {
+    const auto& c = m.vectors(i);
+    DeformationVector v;
+    v.model = Vec3(c.model().x(), c.model().y(), c.model().z());
+    v.scan = Vec3(c.scan().x(), c.scan().y(), c.scan().z());
+    if (!v.model.allFinite() || !v.scan.allFinite())
+      return fail(ErrorCode::kCorruption,
+                  "deformation_field.vectors[" + std::to_string(i) + "] is not finite");
+    v.model_index = static_cast<std::uint32_t>(std::max(0, c.model_index()));
+    v.squared_distance_mm2 = c.squared_distance();
+    v.uncertainty_mm = c.uncertainty_mm();
+    v.support_points = c.support_points();
+    field.vectors.push_back(v);
+  }
+  field.model_points = static_cast<std::size_t>(std::max(0, m.model_points()));
+  field.scan_points = static_cast<std::size_t>(std::max(0, m.scan_points()));
+  field.coverage = m.coverage();
+  field.scan_coverage = m.scan_coverage();
+  field.residual_rms_mm = m.residual_rms_mm();
+  return field;
 }
 
 void append_to_report(const Compensation& compensation, v1::InspectionReport* report) {

@@ -24,6 +24,10 @@ void to_proto(const CompensationSettings& settings, v1::CompensationSettings* me
 /// nearest-neighbour one), sizes, total cost and whether the optimality certificate held.
 void to_proto(const DeformationField& field, v1::DeformationField* message);
 
+/// report.deformation_field -> the field's vectors (model and scan points, CAD frame) and its
+/// sizes, as `springscan compensate` reads it back. Errors: a non-finite vector (kCorruption).
+Expected<DeformationField> from_proto(const v1::DeformationField& message);
+
 /// Appends the supported compensation vectors to report.compensation (unsupported control
 /// points carry no vector; their count is in Compensation::unsupported).
 void append_to_report(const Compensation& compensation, v1::InspectionReport* report);

@@ -83,12 +83,14 @@ TEST(CompensatedShape, SmoothFieldGivesValidBSplineSolid) {
   const OffsetField bulge = [](const std::vector<Vec3>& points) {
     PointOffsets out;
     for (const Vec3& p : points)
-      out.offset.push_back(Vec3(0.002 * p.x(), 0.0, 0.3 * std::sin(p.x() / 25.0) *
-                                                         std::cos(p.y() / 30.0)));
+      out.offset.push_back(
+          Vec3(0.002 * p.x(), 0.0, 0.3 * std::sin(p.x() / 25.0) * std::cos(p.y() / 30.0)));
     out.covered.assign(points.size(), true);
     return out;
   };
-  const auto out = compensated_shape(*cad, bulge);
+  CompensatedShapeSettings settings;
+  settings.canonical_tolerance_mm = 1e-3;  // the bulge is 0.3 mm: no face may stay a plane
+  const auto out = compensated_shape(*cad, bulge, settings);
   ASSERT_TRUE(out) << out.message();
   EXPECT_TRUE(out->valid);
   EXPECT_EQ(out->shape.face_count(), cad->face_count());
