@@ -34,9 +34,9 @@ analysis::Expected<v1::InspectionReport> load_report(fs::path path) {
   if (path.extension() == ".json") {
     const auto status = google::protobuf::util::JsonStringToMessage(*bytes, &report);
     if (!status.ok())
-      return analysis::fail(analysis::ErrorCode::kCorruption,
-                            path.string() + ": not an InspectionReport in JSON: " +
-                                std::string(status.message()));
+      return analysis::fail(
+          analysis::ErrorCode::kCorruption,
+          path.string() + ": not an InspectionReport in JSON: " + std::string(status.message()));
   } else if (!report.ParseFromString(*bytes)) {
     return analysis::fail(analysis::ErrorCode::kCorruption,
                           path.string() + ": not a binary InspectionReport (" +
@@ -46,8 +46,8 @@ analysis::Expected<v1::InspectionReport> load_report(fs::path path) {
 }
 
 // The report must be of this CAD: the SHA-256 of the CAD file's bytes it records.
-analysis::Expected<bool> check_same_part(const v1::InspectionReport& report,
-                                         const std::string& cad, const Logger& log) {
+analysis::Expected<bool> check_same_part(const v1::InspectionReport& report, const std::string& cad,
+                                         const Logger& log) {
   const auto sha = analysis::sha256_file(cad);
   if (!sha) return sha.error();
   const auto& in = report.input();
@@ -108,7 +108,7 @@ int compensate_main(int argc, char** argv) {
   args.add_option("factor", "F", "compensation factor F (default 1)");
   args.add_option("die", "DIE", "the die surface to move (default: --cad)");
   args.add_option("canonical-tolerance", "MM",
-                  "a moved plane or cylinder within this stays one (default 0.03)");
+                  "a moved plane or cylinder within this stays one (default 0.1)");
   Logger log;
   if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   for (const char* required : {"cad", "report", "out"})
@@ -135,19 +135,19 @@ int compensate_main(int argc, char** argv) {
   if (args.has("canonical-tolerance")) {
     const auto mm = args.get_number("canonical-tolerance");
     if (!mm || !(*mm >= 0.0) || *mm > 1.0)
-      return fail_with(kName,
-                       "--canonical-tolerance " + args.get("canonical-tolerance") +
-                           ": expected 0 to 1 mm",
-                       kExitUsage);
+      return fail_with(
+          kName,
+          "--canonical-tolerance " + args.get("canonical-tolerance") + ": expected 0 to 1 mm",
+          kExitUsage);
     settings.canonical_tolerance_mm = *mm;
   }
   const std::string die_path = args.has("die") ? args.get("die") : args.get("cad");
   const auto die = analysis::load_cad(die_path);
   if (!die) return fail_with(kName, die.message(), kExitUsage);
   const auto compensated = analysis::compensated_shape(*die, offsets(*field, *factor), settings);
-  if (!compensated) return fail_with(kName, die_path + ": " + compensated.message(),
-                                     compensated.error().is_invalid_input() ? kExitUsage
-                                                                            : kExitAnalysisFailed);
+  if (!compensated)
+    return fail_with(kName, die_path + ": " + compensated.message(),
+                     compensated.error().is_invalid_input() ? kExitUsage : kExitAnalysisFailed);
   if (auto written = analysis::write_step_atomically(compensated->shape, out); !written)
     return fail_with(kName, written.message(), kExitAnalysisFailed);
   for (const auto& f : compensated->faces)

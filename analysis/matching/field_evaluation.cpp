@@ -41,8 +41,9 @@ FieldAtPoints evaluate_field(const DeformationField& field, const std::vector<Ve
   anchors.reserve(field.vectors.size());
   for (const auto& v : field.vectors) anchors.push_back(v.model);
   const KdTree tree(anchors);
-  const double sigma = settings.smoothing_radius_mm > 0.0 ? settings.smoothing_radius_mm
-                                                          : settings.spacing_factor * median_spacing(tree, anchors);
+  const double sigma = settings.smoothing_radius_mm > 0.0
+                           ? settings.smoothing_radius_mm
+                           : settings.spacing_factor * median_spacing(tree, anchors);
   out.smoothing_radius_mm = sigma;
   std::vector<Neighbor> near;
   for (std::size_t k = 0; k < points.size(); ++k) {

@@ -20,13 +20,13 @@ namespace springscan::analysis {
 
 struct FieldEvaluationSettings {
   double smoothing_radius_mm = 0.0;  ///< sigma; 0: spacing_factor x the median point spacing
-  double spacing_factor = 1.0;        ///< sigma per median point spacing when not given
+  double spacing_factor = 1.0;       ///< sigma per median point spacing when not given
 };
 
 struct FieldAtPoints {
-  std::vector<Vec3> deformation;  ///< d at each point (zero where not covered), mm
-  std::vector<bool> covered;      ///< a field vector lies within 3 sigma
-  std::vector<int> support;       ///< field vectors within 3 sigma
+  std::vector<Vec3> deformation;     ///< d at each point (zero where not covered), mm
+  std::vector<bool> covered;         ///< a field vector lies within 3 sigma
+  std::vector<int> support;          ///< field vectors within 3 sigma
   double smoothing_radius_mm = 0.0;  ///< sigma used
 };
 

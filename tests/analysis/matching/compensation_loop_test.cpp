@@ -136,9 +136,10 @@ TEST_P(CompensationLoop, ClosesWithinTwentyPercentThenFiftyMicrons) {
     const Measured m = produce_and_measure(nominal, die, springback, points);
     ASSERT_TRUE(m.report.has_deformation_field());
     errors.push_back(m.form_error_p95);
-    std::printf("[ loop ] %s round %d: form error p95 %.4f mm (max %.4f), measured |dev| p95 "
-                "%.4f mm\n",
-                c.name.c_str(), round, m.form_error_p95, m.form_error_max, m.measured_p95);
+    std::printf(
+        "[ loop ] %s round %d: form error p95 %.4f mm (max %.4f), measured |dev| p95 "
+        "%.4f mm\n",
+        c.name.c_str(), round, m.form_error_p95, m.form_error_max, m.measured_p95);
     if (round == rounds) break;
     die = compensate(die, m.report, dir.file("die" + std::to_string(round + 1) + ".step"));
     ASSERT_EQ(die.model.face_count, nominal.model.face_count);
@@ -163,10 +164,9 @@ const parts::ProfileSpec& hat_solid() {
 
 INSTANTIATE_TEST_SUITE_P(
     Parts, CompensationLoop,
-    ::testing::Values(LoopCase{"hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}},
-                      LoopCase{"openamr-MMP.03.00.00.003_Motor_bracket.step",
-                               nullptr,
-                               {1.5, 1.0, 2.0, 0.8}}),
+    ::testing::Values(
+        LoopCase{"hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}},
+        LoopCase{"openamr-MMP.03.00.00.003_Motor_bracket.step", nullptr, {1.5, 1.0, 2.0, 0.8}}),
     [](const ::testing::TestParamInfo<LoopCase>& param) {
       return param.index == 0 ? std::string("HatProfile") : std::string("MotorBracket");
     });

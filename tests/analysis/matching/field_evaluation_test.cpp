@@ -28,8 +28,8 @@ TEST(FieldEvaluation, ReproducesALinearFieldAtTheFreeEdge) {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(2.0 * EIGEN_PI / 180.0, Vec3::UnitY()).matrix();
   const DeformationField field = turning_flange(R);
   // Between the grid points, on the free edge (x = 100) and its corner, and just off the sheet.
-  const std::vector<Vec3> points{{51.0, 13.0, 0.0}, {100.0, 21.0, 0.0}, {100.0, 40.0, 0.0},
-                                 {99.0, 1.0, 0.75}};
+  const std::vector<Vec3> points{
+      {51.0, 13.0, 0.0}, {100.0, 21.0, 0.0}, {100.0, 40.0, 0.0}, {99.0, 1.0, 0.75}};
   const auto at = evaluate_field(field, points);
   EXPECT_NEAR(at.smoothing_radius_mm, 2.0, 1e-9);
   for (std::size_t k = 0; k < points.size(); ++k) {

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "analysis/messages/verdict_proto.hpp"
 
 namespace springscan::analysis {
@@ -95,6 +97,36 @@ TEST(MatchingProto, FieldAndCompensationGoIntoTheReport) {
   append_to_report(comp, &report);
   ASSERT_EQ(report.compensation_size(), 1);
   EXPECT_EQ(report.compensation(0).vector().z(), -1.0);
+}
+
+// springscan compensate reads the field back from report.pb: the vectors come back as written.
+TEST(MatchingProto, FieldReadsBackFromTheReport) {
+  DeformationField field;
+  field.refined = true;
+  field.model_points = 3;
+  for (int i = 0; i < 3; ++i) {
+    DeformationVector v;
+    v.model_index = static_cast<std::uint32_t>(i);
+    v.model = Vec3(i, 2.0 * i, -1.0);
+    v.scan = v.model + Vec3(0.1, -0.2, 0.05 * i);
+    field.vectors.push_back(v);
+  }
+  v1::DeformationField message;
+  to_proto(field, &message);
+  const auto back = from_proto(message);
+  ASSERT_TRUE(back) << back.message();
+  EXPECT_TRUE(back->refined);
+  ASSERT_EQ(back->vectors.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(back->vectors[i].model_index, i);
+    EXPECT_EQ(back->vectors[i].model, field.vectors[i].model);
+    EXPECT_EQ(back->vectors[i].displacement(), field.vectors[i].displacement());
+  }
+  message.mutable_vectors(1)->mutable_scan()->set_x(std::nan(""));
+  const auto bad = from_proto(message);
+  ASSERT_FALSE(bad);
+  EXPECT_TRUE(bad.error().is_corruption());
+  EXPECT_NE(bad.message().find("vectors[1]"), std::string::npos);
 }
 
 }  // namespace
