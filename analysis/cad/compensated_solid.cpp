@@ -264,6 +264,41 @@ double percentile_95(std::vector<double> values) {
   return values[k];
 }
 
+// One face: its coverage checked, its samples moved and refitted.
+Expected<bool> refit_face(const TopoDS_Face& face, const CadFaceInfo& info, const Sampling& s,
+                          const CompensatedShapeSettings& settings, FaceData& d,
+                          std::vector<double>& deviations) {
+  d.report.id = info.id;
+  std::size_t covered = 0;
+  for (std::size_t k = 0; k < d.index.size(); ++k) {
+    const auto i = static_cast<std::size_t>(d.index[k]);
+    d.samples[k].moved = s.points[i] + s.offset[i];
+    covered += s.covered[i] ? 1 : 0;
+    d.report.max_offset_mm = std::max(d.report.max_offset_mm, s.offset[i].norm());
+  }
+  d.report.coverage =
+      d.index.empty() ? 1.0 : static_cast<double>(covered) / static_cast<double>(d.index.size());
+  if (d.report.coverage < settings.min_face_coverage)
+    return fail("compensated shape: the deformation field does not cover " + describe(info) + ": " +
+                std::to_string(covered) + " of its " + std::to_string(d.index.size()) +
+                " samples have a deformation vector nearby");
+  add_boundary(face, d, s);
+  if (d.samples.empty())
+    return fail(ErrorCode::kInternal,
+                "compensated shape: face " + std::to_string(info.id) + " has no samples");
+  d.fit = compensated::fit_face(face, d.samples, d.box, !d.seam, settings);
+  d.report.surface = d.fit.kind;
+  d.report.canonical_deviation_mm = d.fit.canonical_deviation_mm;
+  face_deviations(d, deviations);
+  if (d.report.max_deviation_mm > settings.max_fit_deviation_mm)
+    return fail(ErrorCode::kAnalysisFailed,
+                "compensated shape: the refit of " + describe(info) + " lies " +
+                    std::to_string(d.report.max_deviation_mm) +
+                    " mm from its moved samples (limit " +
+                    std::to_string(settings.max_fit_deviation_mm) + " mm)");
+  return true;
+}
+
 // Samples, asks the field, checks coverage and refits every edge and face.
 Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& s,
                      const CompensatedShapeSettings& settings, CompensatedShape& out,
@@ -290,35 +325,11 @@ Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& 
   const std::vector<CadFaceInfo> info = describe_faces(shape);
   for (int f = 0; f < impl.faces.Extent(); ++f) {
     FaceData& d = s.face[static_cast<std::size_t>(f)];
-    d.report.id = f;
-    std::size_t covered = 0;
-    for (std::size_t k = 0; k < d.index.size(); ++k) {
-      d.samples[k].moved = moved(d.index[k]);
-      covered += s.covered[static_cast<std::size_t>(d.index[k])] ? 1 : 0;
-      d.report.max_offset_mm = std::max(d.report.max_offset_mm, s.offset[d.index[k]].norm());
-    }
-    d.report.coverage =
-        d.index.empty() ? 1.0 : static_cast<double>(covered) / static_cast<double>(d.index.size());
-    if (d.report.coverage < settings.min_face_coverage)
-      return fail("compensated shape: the deformation field does not cover " +
-                  describe(info[static_cast<std::size_t>(f)]) + ": " + std::to_string(covered) +
-                  " of its " + std::to_string(d.index.size()) +
-                  " samples have a deformation vector nearby");
-    add_boundary(impl.face(f), d, s);
-    if (d.samples.empty())
-      return fail(ErrorCode::kInternal,
-                  "compensated shape: face " + std::to_string(f) + " has no samples");
-    d.fit = compensated::fit_face(impl.face(f), d.samples, d.box, !d.seam, settings);
-    d.report.surface = d.fit.kind;
-    d.report.canonical_deviation_mm = d.fit.canonical_deviation_mm;
-    face_deviations(d, deviations);
+    if (auto done =
+            refit_face(impl.face(f), info[static_cast<std::size_t>(f)], s, settings, d, deviations);
+        !done)
+      return done.error();
     out.max_deviation_mm = std::max(out.max_deviation_mm, d.report.max_deviation_mm);
-    if (d.report.max_deviation_mm > settings.max_fit_deviation_mm)
-      return fail(ErrorCode::kAnalysisFailed,
-                  "compensated shape: the refit of " + describe(info[static_cast<std::size_t>(f)]) +
-                      " lies " + std::to_string(d.report.max_deviation_mm) +
-                      " mm from its moved samples (limit " +
-                      std::to_string(settings.max_fit_deviation_mm) + " mm)");
     out.faces.push_back(d.report);
   }
   return true;
