@@ -2,7 +2,8 @@
 # springscan compensate end to end on the bundled demo pair (demo/README.md: the hat profile
 # with springback 1.5, 0.8, 1.1 and 0.4 degrees at bends 0 to 3): analyze, compensate with
 # F = 1, and the compensated STEP re-imported through `springscan model` with the same faces,
-# flanges and bends, each bend over-bent by about its springback (nominal 60 degrees). Bad
+# flanges and bends, each bend over-bent by about its springback (nominal 60 degrees); --die
+# moves that die once more. Bad
 # input: a report of another part, a report folder without report.pb, a bad factor; each
 # refused with exit 2 naming it, and an existing output left as it was.
 #   compensate_test.sh SPRINGSCAN_BINARY DEMO_DIR
@@ -36,6 +37,20 @@ for b in die["bends"]:
     over = b["nominal_angle_deg"] - 60.0
     assert abs(over - truth[b["id"]]) <= 0.15, f"bend {b['id']}: over-bent {over:.3f}"
 PY
+
+# --die: the same report applied to the die again moves it once more (about twice the
+# springback over-bent), still checked against the nominal part's hash.
+"$bin" compensate --cad "$demo/hat-profile.step" --report "$tmp/out/report.pb" \
+  --die "$tmp/die.step" --out "$tmp/die2.step" --quiet >/dev/null
+"$bin" model --json "$tmp/die2.step" | python3 -c '
+import json, sys
+die = json.load(sys.stdin)
+assert die["faces"] == 9 and len(die["flanges"]) == 5 and len(die["bends"]) == 4, die["bends"]
+truth = {0: 1.5, 1: 0.8, 2: 1.1, 3: 0.4}
+for b in die["bends"]:
+    over = b["nominal_angle_deg"] - 60.0
+    assert abs(over - 2 * truth[b["id"]]) <= 0.3, (b["id"], over)
+'
 
 # The same report as report.pb and as a store record's folder; the part of another CAD refused.
 cp "$tmp/die.step" "$tmp/keep.step"
