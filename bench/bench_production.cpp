@@ -103,6 +103,7 @@ void BM_InspectionSidePanel1M(benchmark::State& state) {
   state.counters["deviation_ms"] = t.deviation();
   state.counters["local_fits_ms"] = t.local_fits();
   state.counters["field_ms"] = t.deformation();
+  state.counters["total_ms"] = t.total();
   state.counters["residual_mm"] = last.global_fit().rms_residual();
   int measured = 0;
   for (const auto& b : last.bends()) measured += b.measured() ? 1 : 0;

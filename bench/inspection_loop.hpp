@@ -1,7 +1,7 @@
 #pragma once
 // The timed loop of the whole-analysis benchmarks: run_inspection on `threads` (the benchmark's
-// argument) every iteration; the last report for the counters, or nothing (the benchmark is
-// then marked skipped with the error).
+// argument unless given; 0 = all cores) every iteration; the last report for the counters, or
+// nothing (the benchmark is then marked skipped with the error).
 #include <benchmark/benchmark.h>
 
 #include <optional>
@@ -12,9 +12,10 @@ namespace springscan::bench {
 
 inline std::optional<v1::InspectionReport> timed_inspections(benchmark::State& state,
                                                              const analysis::PartModel& model,
-                                                             const analysis::PointCloud& scan) {
+                                                             const analysis::PointCloud& scan,
+                                                             int threads) {
   v1::AnalysisSettings settings;
-  settings.set_threads(static_cast<int>(state.range(0)));
+  settings.set_threads(threads);
   v1::InspectionReport last;
   for (auto _ : state) {
     auto outcome = analysis::run_inspection(model, scan, settings);
@@ -25,6 +26,12 @@ inline std::optional<v1::InspectionReport> timed_inspections(benchmark::State& s
     last = std::move(outcome->report);
   }
   return last;
+}
+
+inline std::optional<v1::InspectionReport> timed_inspections(benchmark::State& state,
+                                                             const analysis::PartModel& model,
+                                                             const analysis::PointCloud& scan) {
+  return timed_inspections(state, model, scan, static_cast<int>(state.range(0)));
 }
 
 }  // namespace springscan::bench

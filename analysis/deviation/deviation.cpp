@@ -7,6 +7,7 @@
 #include <string>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/spatial_order.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -172,15 +173,22 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
   }
   result.signed_distance_mm.resize(scan_in_cad.size());
   if (result.exact) {
-    // A scan comes line by line: the previous point's foot bounds the next point's distance,
-    // and that bound prunes the search (SurfaceDistance::closest_within).
+    // In space order, whatever order the scan came in: the previous point's foot bounds the
+    // next point's distance, and that bound prunes the search (SurfaceDistance::closest_within),
+    // and neighbouring queries share the BVH nodes in cache. Each point's answer is the same in
+    // any order. A block's points are gathered first and its answers scattered after, in tight
+    // loops whose cache misses overlap (inside the search loop each would stall it).
+    const std::vector<std::uint32_t> order = spatial_order(scan_in_cad, settings.threads);
     parallel_blocks(
         scan_in_cad.size(), settings.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+          std::vector<Vec3> points(end - begin);
+          std::vector<double> distances(end - begin);
+          for (std::size_t k = begin; k < end; ++k) points[k - begin] = scan_in_cad[order[k]];
           closest_in_order(
-              *model.distance, begin, end, [&](std::size_t i) { return scan_in_cad[i]; },
-              [&](std::size_t i, const SurfaceHit& hit) {
-                result.signed_distance_mm[i] = hit.signed_distance_mm;
-              });
+              *model.distance, 0, points.size(), [&](std::size_t j) { return points[j]; },
+              [&](std::size_t j, const SurfaceHit& hit) { distances[j] = hit.signed_distance_mm; });
+          for (std::size_t k = begin; k < end; ++k)
+            result.signed_distance_mm[order[k]] = distances[k - begin];
         });
   } else {
     // Tangent plane of the nearest sample: exact on flat faces, and the sign says whether the

@@ -29,6 +29,9 @@ struct ScanGrid {
   std::vector<std::int32_t> slot;      // per cell: bucket, or -1 when not marked
   std::vector<std::uint32_t> offsets;  // per bucket: start in `indices`
   std::vector<std::uint32_t> indices;  // scan point indices, bucket by bucket
+  std::vector<Vec3> points;            // those points, copied in the same order: the support
+                                       // reads a bucket's points side by side in memory
+                                       // (in a shuffled scan, each read would miss the cache)
 
   bool cell_of(const Vec3& p, Eigen::Array3i& c) const {
     const Eigen::Array3d f = ((p - origin) / cell).array().floor();
@@ -86,6 +89,10 @@ ScanGrid build_grid(const std::vector<Vec3>& centers, double reach, const std::v
   for (std::size_t j = 0; j < scan.size(); ++j)
     if (bucket_of[j] >= 0)
       g.indices[fill[static_cast<std::size_t>(bucket_of[j])]++] = static_cast<std::uint32_t>(j);
+  g.points.resize(g.indices.size());
+  parallel_blocks(g.indices.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) g.points[k] = scan[g.indices[k]];
+  });
   return g;
 }
 
@@ -196,7 +203,7 @@ std::vector<Vec3> grid_normals(const FieldRefinementInput& in, const ScanGrid& g
     if (bucket_needed[b])
       for (std::uint32_t k = g.offsets[b]; k < g.offsets[b + 1]; ++k) {
         at.push_back(k);
-        points.push_back(in.scan_points[g.indices[k]]);
+        points.push_back(g.points[k]);
       }
   out.assign(g.indices.size(), Vec3::Zero());
   if (points.size() < 3) return out;
@@ -244,7 +251,7 @@ Support support_of(const FieldRefinementInput& in, const FieldPrediction& pred, 
         const std::int32_t b = g.slot[g.flat(c + Eigen::Array3i(dx, dy, dz))];
         for (std::uint32_t k = g.offsets[static_cast<std::size_t>(b)];
              k < g.offsets[static_cast<std::size_t>(b) + 1]; ++k) {
-          const Vec3 d = Rt * (in.scan_points[g.indices[k]] - P);  // CAD frame, from m
+          const Vec3 d = Rt * (g.points[k] - P);  // CAD frame, from m
           const double along = n.dot(d);
           if ((d - along * n).squaredNorm() > r2) continue;
           double res = along;

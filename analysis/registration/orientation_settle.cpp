@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/spatial_order.hpp"
 #include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
@@ -54,13 +55,19 @@ struct Settled {
   std::vector<double> decisive_mm;  // |exact distance| of each decisive point (NaN: none)
 };
 
-// |exact distance| of every point under T (in scan order: closest_in_order).
+// |exact distance| of every point under T. Queried in space order (closest_in_order: each
+// query starts from its neighbour's answer), whatever the scan's order; the answers are the same.
 std::vector<double> exact_distances(const std::vector<Vec3>& points, const Transform& T,
                                     const SurfaceDistance& exact) {
+  const std::vector<std::uint32_t> order = spatial_order(points, 1);
+  std::vector<Vec3> ordered(points.size());
+  for (std::size_t k = 0; k < order.size(); ++k) ordered[k] = T * points[order[k]];
   std::vector<double> d(points.size());
   closest_in_order(
-      exact, 0, points.size(), [&](std::size_t i) { return Vec3(T * points[i]); },
-      [&](std::size_t i, const SurfaceHit& hit) { d[i] = std::abs(hit.signed_distance_mm); });
+      exact, 0, ordered.size(), [&](std::size_t k) { return ordered[k]; },
+      [&](std::size_t k, const SurfaceHit& hit) {
+        d[order[k]] = std::abs(hit.signed_distance_mm);
+      });
   return d;
 }
 

@@ -1,0 +1,106 @@
+#include "analysis/core/spatial_order.hpp"
+
+#include <algorithm>
+#include <array>
+
+#include "analysis/core/parallel.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+constexpr int kDigitBits = kSpatialOrderBits;  // three passes
+constexpr std::size_t kDigits = std::size_t{1} << kDigitBits;
+constexpr std::uint32_t kAxisMax = (1u << kSpatialOrderBits) - 1;
+
+struct Keyed {
+  std::uint32_t key;
+  std::uint32_t index;
+};
+
+// The low 10 bits of v, bit i moved to bit 3i (the usual Morton spread).
+std::uint32_t spread(std::uint32_t v) {
+  v &= 0x3ffu;
+  v = (v | (v << 16)) & 0x030000ffu;
+  v = (v | (v << 8)) & 0x0300f00fu;
+  v = (v | (v << 4)) & 0x030c30c3u;
+  v = (v | (v << 2)) & 0x09249249u;
+  return v;
+}
+
+// The bounding box, from per-block partials (combined in block order).
+std::pair<Vec3, Vec3> box(const std::vector<Vec3>& points, int threads) {
+  std::vector<std::pair<Vec3, Vec3>> partial(block_count(points.size()));
+  parallel_blocks(points.size(), threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    Vec3 lo = points[begin], hi = points[begin];
+    for (std::size_t i = begin + 1; i < end; ++i) {
+      lo = lo.cwiseMin(points[i]);
+      hi = hi.cwiseMax(points[i]);
+    }
+    partial[b] = {lo, hi};
+  });
+  auto [lo, hi] = partial.front();
+  for (const auto& [l, h] : partial) {
+    lo = lo.cwiseMin(l);
+    hi = hi.cwiseMax(h);
+  }
+  return {lo, hi};
+}
+
+// One stable counting-sort pass of `from` into `to` by the digit at `shift`: per-block
+// histograms, each (digit, block) pair's start by a prefix sum in digit-then-block order, then
+// each block scatters its points in input order. False (nothing moved) when every key has the
+// same digit there.
+bool radix_pass(const std::vector<Keyed>& from, std::vector<Keyed>& to, int shift, int threads) {
+  const std::size_t blocks = block_count(from.size());
+  std::vector<std::array<std::uint32_t, kDigits>> start(blocks);
+  const auto digit = [shift](const Keyed& k) { return (k.key >> shift) & (kDigits - 1); };
+  parallel_blocks(from.size(), threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    start[b].fill(0);
+    for (std::size_t i = begin; i < end; ++i) ++start[b][digit(from[i])];
+  });
+  for (std::size_t d = 0; d < kDigits; ++d) {
+    std::size_t total = 0;
+    for (std::size_t b = 0; b < blocks; ++b) total += start[b][d];
+    if (total == from.size()) return false;
+  }
+  std::uint32_t running = 0;  // the caller's points fit 32-bit indices
+  for (std::size_t d = 0; d < kDigits; ++d)
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::uint32_t count = start[b][d];
+      start[b][d] = running;
+      running += count;
+    }
+  parallel_blocks(from.size(), threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    std::array<std::uint32_t, kDigits>& next = start[b];
+    for (std::size_t i = begin; i < end; ++i) to[next[digit(from[i])]++] = from[i];
+  });
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
+  if (points.empty()) return {};
+  const auto [lo, hi] = box(points, threads);
+  const double extent = (hi - lo).maxCoeff();
+  const double scale = extent > 0.0 ? double(kAxisMax + 1) / extent : 0.0;
+  std::vector<Keyed> keyed(points.size()), other(points.size());
+  parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3 cell = ((points[i] - lo) * scale).cwiseMin(double(kAxisMax));
+      keyed[i] = {spread(static_cast<std::uint32_t>(cell.x())) |
+                      (spread(static_cast<std::uint32_t>(cell.y())) << 1) |
+                      (spread(static_cast<std::uint32_t>(cell.z())) << 2),
+                  static_cast<std::uint32_t>(i)};
+    }
+  });
+  for (int shift = 0; shift < 3 * kSpatialOrderBits; shift += kDigitBits)
+    if (radix_pass(keyed, other, shift, threads)) keyed.swap(other);
+  std::vector<std::uint32_t> order(points.size());
+  parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) order[i] = keyed[i].index;
+  });
+  return order;
+}
+
+}  // namespace springscan::analysis

@@ -1,0 +1,31 @@
+#pragma once
+// A visiting order of a point set in which neighbours in the order are neighbours in space: the
+// order a per-point search loop should run in, whatever order the points came in. A scan read
+// from a file, merged from several heads or shuffled costs the nearest-neighbour and
+// exact-distance searches twice as much in cache misses as one in scanner lines (issue 37,
+// docs/performance.md); run in this order, both cost the same.
+//
+// Only the order of the searches changes, never the data: a loop visits order[k] and writes
+// its result to slot order[k], so its results, and every sum over them taken in index order,
+// are those of the loop in index order.
+
+#include <cstdint>
+#include <vector>
+
+#include "analysis/core/point_cloud.hpp"
+
+namespace springscan::analysis {
+
+/// Bits per axis of the grid spatial_order sorts by: 2^9 cells along the longest side of the
+/// bounding box (0.4 mm cells on a 200 mm part, 4 mm on a 2 m sheet). Finer cells would only
+/// cost radix passes: a cell's points already share the search's tree nodes in cache.
+inline constexpr int kSpatialOrderBits = 9;
+
+/// A permutation of [0, points.size()): the points by the Morton (Z-order) code of their cell in
+/// a grid of cubic cells over their bounding box, kSpatialOrderBits per axis; points of one cell
+/// keep their input order. O(n): a stable least-significant-digit radix sort of 9-bit digits, in
+/// blocks of a fixed size on up to `threads` threads (0 = all cores); the result does not depend
+/// on the thread count. Points must be finite. Thread safety: a pure function.
+std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads = 0);
+
+}  // namespace springscan::analysis
