@@ -17,6 +17,7 @@
 #include <string>
 
 #include "analysis/cad/model.hpp"
+#include "analysis/core/spatial_order.hpp"
 #include "analysis/inspection/pipeline.hpp"
 #include "bench/inspection_loop.hpp"
 #include "simulators/parts/sheet_part.hpp"
@@ -129,6 +130,22 @@ BENCHMARK(BM_AnalysisHat1M)
     ->Arg(kShuffled)
     ->Arg(kGridSorted)
     ->Arg(kScanLines)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MeasureProcessCPUTime();
+
+// The reordering alone (analysis/core/spatial_order.hpp) of the shuffled scan, on 1 and 2 threads.
+void BM_SpatialOrder1M(benchmark::State& state) {
+  const Data& d = data();
+  const PointCloud scan = ordered(d.scan, kShuffled);
+  for (auto _ : state) {
+    auto order = spatial_order(scan.points, static_cast<int>(state.range(0)));
+    benchmark::DoNotOptimize(order.data());
+  }
+}
+BENCHMARK(BM_SpatialOrder1M)
+    ->Arg(1)
+    ->Arg(2)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime();

@@ -1,8 +1,8 @@
 #include "analysis/preprocess/voxel.hpp"
 
-#include <bit>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "analysis/core/parallel.hpp"
 
@@ -11,33 +11,56 @@ namespace {
 
 constexpr std::int64_t kAxisCells = std::int64_t{1} << 20;  // 21 bits per axis in the key
 
-// Open addressing with linear probing: voxel key -> output slot. Sized to a power of two at
-// least twice the input, so it never fills up.
+// Open addressing with linear probing: voxel key -> output slot. Starts small and doubles
+// whenever it is half full: a scan has far fewer voxels than points (a few thousand fit points
+// of a 1M scan), and a table sized to the points (2M slots, 24 MB) missed the cache on every
+// point, however the points came. The slots, and so the output, are the same at any size.
 class VoxelTable {
  public:
-  explicit VoxelTable(std::size_t n) : mask_(std::bit_ceil(2 * n + 2) - 1) {
-    keys_.assign(mask_ + 1, kEmpty);
-    slots_.assign(mask_ + 1, 0);
-  }
+  VoxelTable() { resize(kInitialSlots); }
   // The slot of `key`, or `fresh` (recorded) when the key is new.
   std::uint32_t find_or_insert(std::uint64_t key, std::uint32_t fresh, bool& inserted) {
-    std::size_t h = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
-    while (keys_[h] != kEmpty) {
-      if (keys_[h] == key) {
-        inserted = false;
-        return slots_[h];
-      }
-      h = (h + 1) & mask_;
+    std::size_t h = probe(key);
+    if (keys_[h] == key) {
+      inserted = false;
+      return slots_[h];
     }
     keys_[h] = key;
     slots_[h] = fresh;
     inserted = true;
+    if (++used_ * 2 > keys_.size()) grow();
     return fresh;
   }
 
  private:
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
-  std::size_t mask_;
+  static constexpr std::size_t kInitialSlots = 4096;
+
+  // The position of `key`, or the empty one where it goes.
+  std::size_t probe(std::uint64_t key) const {
+    std::size_t h = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+    while (keys_[h] != kEmpty && keys_[h] != key) h = (h + 1) & mask_;
+    return h;
+  }
+  void resize(std::size_t slots) {
+    mask_ = slots - 1;
+    keys_.assign(slots, kEmpty);
+    slots_.assign(slots, 0);
+  }
+  void grow() {
+    const std::vector<std::uint64_t> keys = std::move(keys_);
+    const std::vector<std::uint32_t> slots = std::move(slots_);
+    resize(2 * keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i] != kEmpty) {
+        const std::size_t h = probe(keys[i]);
+        keys_[h] = keys[i];
+        slots_[h] = slots[i];
+      }
+  }
+
+  std::size_t mask_ = 0;
+  std::size_t used_ = 0;
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint32_t> slots_;
 };
@@ -62,7 +85,7 @@ Expected<VoxelResult> voxel_reduce(const PointCloud& cloud, const VoxelSettings&
                 " is too small for a cloud spanning " + std::to_string((hi - lo).maxCoeff()) +
                 " mm");
   const bool normals = cloud.has_normals() && cloud.normals.size() == cloud.size();
-  VoxelTable table(cloud.size());
+  VoxelTable table;
   std::vector<Vec3> sums, normal_sums;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Vec3 cell = ((cloud.points[i] - lo) * inv).array().floor();

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/spatial_order.hpp"
 #include "analysis/registration/icp_terms.hpp"
 
 namespace springscan::analysis {
@@ -27,12 +28,17 @@ struct Run {
   Vec3 centroid = Vec3::Zero();
   double scale_mm = 1.0;  // rms distance of the source points from their centroid
   std::size_t min_pairs = 0;
+  std::vector<std::uint32_t> order;  // the source in space order (find_pairs)
   std::vector<IcpPair> pairs;
   std::vector<double> residuals;
   std::vector<double> scratch;
 
   Run(const std::vector<Vec3>& points, const IcpPairSearch& finder, const IcpSettings& settings)
-      : source(points), search(finder), s(settings), pairs(points.size()) {
+      : source(points),
+        search(finder),
+        s(settings),
+        order(spatial_order(points, settings.threads)),
+        pairs(points.size()) {
     for (const Vec3& p : source) centroid += p;
     centroid /= static_cast<double>(source.size());
     double spread = 0.0;
@@ -45,9 +51,12 @@ struct Run {
     scratch.reserve(source.size());
   }
 
+  // The pairs of every source point at T, searched in space order (spatial_order: neighbouring
+  // searches walk the same part of the target's tree or BVH, whatever order the source came
+  // in); each search writes its own pair, so the pairs are those of a search in index order.
   void find_pairs(const Transform& T) {
     parallel_blocks(source.size(), s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-      search(source, T, begin, end, pairs);
+      for (std::size_t k = begin; k < end; ++k) search(source, T, order[k], order[k] + 1, pairs);
     });
   }
 
