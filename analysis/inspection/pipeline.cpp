@@ -81,6 +81,7 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   s.verdict = *verdict;
   s.springback.threads = s.field.refinement.threads = s.threads;
   s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
+  s.global_fit.boundary.threads = s.threads;
   s.deviation.threads = s.reduction.curvature.threads = s.alignment.threads = s.threads;
   return s;
 }

@@ -8,6 +8,9 @@
 #include <limits>
 #include <random>
 
+#include "analysis/core/parallel.hpp"
+#include "analysis/core/spatial_order.hpp"
+
 namespace springscan::analysis {
 namespace {
 
@@ -84,11 +87,16 @@ SurfaceContact contact(const Vec3& q, const KdTree& tree, const std::vector<Vec3
 // points on the surface) whose eigenvalue is below ratio x the largest.
 std::vector<Vec3> free_translations(const std::vector<Vec3>& scan_cad, const KdTree& tree,
                                     const std::vector<Vec3>& normals, const BoundarySettings& s) {
+  const std::vector<Vec3> points = strided_sample(scan_cad, s.info_points);
+  const std::vector<std::uint32_t> order = spatial_order(points, s.threads);
+  std::vector<SurfaceContact> contacts(points.size());
+  parallel_blocks(points.size(), s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k)
+      contacts[order[k]] = contact(points[order[k]], tree, normals);
+  });
   Mat3 info = Mat3::Zero();
-  for (const Vec3& q : strided_sample(scan_cad, s.info_points)) {
-    const SurfaceContact c = contact(q, tree, normals);
+  for (const SurfaceContact& c : contacts)  // in the sample's order: the sum does not depend
     if (c.distance_mm <= s.surface_distance_mm) info += c.normal * c.normal.transpose();
-  }
   std::vector<Vec3> out;
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(info);
   const double largest = eig.eigenvalues().maxCoeff();
@@ -123,24 +131,44 @@ Extent model_extent(const OrientedPoints& model, const Vec3& u, const BoundarySe
   return extent_of(std::move(values), s);
 }
 
+// Scan points (scan frame) with the order their searches run in (spatial_order).
+struct OrderedScan {
+  std::vector<Vec3> points;
+  std::vector<std::uint32_t> order;
+};
+
 // The scan's extent along u over its points on the surface. With a `window`, only points within
-// it of the model's ends are looked at (the nearest-sample queries are the cost).
-Extent scan_extent(const std::vector<Vec3>& scan, const Transform& T, const KdTree& tree,
+// it of the model's ends are looked at (the nearest-sample queries are the cost). The queries
+// run on s.threads threads in space order; the ends are taken from the points in their order.
+Extent scan_extent(const OrderedScan& scan, const Transform& T, const KdTree& tree,
                    const std::vector<Vec3>& normals, const Vec3& u, const Extent& model,
                    const BoundarySettings& s, double window) {
+  constexpr std::uint8_t kHigh = 1, kLow = 2;
+  std::vector<std::uint8_t> near(scan.points.size(), 0);  // kHigh | kLow, 0: not used
+  std::vector<double> along(scan.points.size());
+  parallel_blocks(
+      scan.points.size(), s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+          const std::uint32_t i = scan.order[k];
+          const Vec3 q = T * scan.points[i];
+          const double v = u.dot(q);
+          const bool near_high = v >= *model.high - window, near_low = v <= *model.low + window;
+          if (!near_high && !near_low) continue;
+          // As on the model's side, points on faces that look along u are left out:
+          // a solid's end face (a wall's outer skin, a sheet's edge) seen at a slant
+          // piles its points up at the end, and the band's mean would place the end
+          // up to a band width too far out.
+          const SurfaceContact c = contact(q, tree, normals);
+          if (c.distance_mm > s.surface_distance_mm || std::abs(c.normal.dot(u)) > kFacingAlong)
+            continue;
+          along[i] = v;
+          near[i] = static_cast<std::uint8_t>((near_high ? kHigh : 0) | (near_low ? kLow : 0));
+        }
+      });
   std::vector<double> high, low;
-  for (const Vec3& p : scan) {
-    const Vec3 q = T * p;
-    const double v = u.dot(q);
-    const bool near_high = v >= *model.high - window, near_low = v <= *model.low + window;
-    if (!near_high && !near_low) continue;
-    // As on the model's side, points on faces that look along u are left out: a solid's end
-    // face (a wall's outer skin, a sheet's edge) seen at a slant piles its points up at the end,
-    // and the band's mean would place the end up to a band width too far out.
-    const SurfaceContact c = contact(q, tree, normals);
-    if (c.distance_mm > s.surface_distance_mm || std::abs(c.normal.dot(u)) > kFacingAlong) continue;
-    if (near_high) high.push_back(v);
-    if (near_low) low.push_back(v);
+  for (std::size_t i = 0; i < near.size(); ++i) {
+    if (near[i] & kHigh) high.push_back(along[i]);
+    if (near[i] & kLow) low.push_back(along[i]);
   }
   Extent e;
   e.high = high_end(high, s.end_band_mm, s.min_band_points, kSkipOutermost);
@@ -158,7 +186,7 @@ std::string mm(double v) {
 // Locates both ends of scan and model along u and moves the fit to match them (boundary.hpp
 // step 2), repeated while the shift changes: points past the model's end only count once the
 // fit has brought them onto the surface.
-FreeDirection pin_direction(const std::vector<Vec3>& scan, Transform& T, const KdTree& tree,
+FreeDirection pin_direction(const OrderedScan& scan, Transform& T, const KdTree& tree,
                             const std::vector<Vec3>& normals, const OrientedPoints& model,
                             const Vec3& u, const BoundarySettings& s) {
   FreeDirection d;
@@ -235,7 +263,8 @@ Expected<BoundaryResult> pin_to_boundary(const std::vector<Vec3>& scan, const Tr
   for (Vec3& p : info_scan) p = T_cad_scan * p;
   const std::vector<Vec3> free = free_translations(info_scan, model_tree, normals, settings);
   if (free.empty()) return out;
-  const std::vector<Vec3> sample = strided_sample(scan, settings.scan_points);
+  OrderedScan sample{strided_sample(scan, settings.scan_points), {}};
+  sample.order = spatial_order(sample.points, settings.threads);
   const OrientedPoints surface = model_surface(model, settings.model_points);
   for (const Vec3& u : free)
     out.free_directions.push_back(

@@ -46,6 +46,7 @@ struct BoundarySettings {
   std::size_t scan_points = 200'000;    ///< scan points (strided) for the end positions
   std::size_t model_points = 200'000;   ///< even samples of the tessellation for the model's
   std::size_t min_band_points = 20;     ///< fewer in an end band: that end is not located
+  int threads = 0;                      ///< worker threads (0 = all cores); same result for any
 };
 
 /// A translation the scan's surface does not fix, and what the boundary made of it.

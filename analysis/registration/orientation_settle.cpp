@@ -302,7 +302,7 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
     if (k > 0) {
       r.candidate = rivals[k - 1];
       GlobalFitSettings serial = settings;
-      serial.icp.threads = 1;  // parallel over the rivals instead
+      serial.icp.threads = serial.boundary.threads = 1;  // parallel over the rivals instead
       auto icp_fit = final_icp(in.fit_points, in.model_tree, in.model.samples.normals,
                                choice.candidates[r.candidate].T_cad_scan, serial, in.fit_normals);
       if (!icp_fit) {
@@ -315,7 +315,7 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
         return;
       }
       auto pin = pin_to_boundary(in.scan, icp_fit->T_target_source, in.model, in.model_tree,
-                                 settings.boundary);
+                                 serial.boundary);
       if (!pin) {
         errors[k] = pin.message();
         return;
