@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <numeric>
 
 #include "analysis/core/parallel.hpp"
 
@@ -101,6 +102,33 @@ std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int th
     for (std::size_t i = begin; i < end; ++i) order[i] = keyed[i].index;
   });
   return order;
+}
+
+bool spatially_coherent(const std::vector<Vec3>& points) {
+  constexpr std::size_t kPairs = 1024;
+  constexpr double kCoherentShare = 0.01;
+  if (points.size() < 2) return true;
+  const std::size_t pairs = std::min(kPairs, points.size() - 1);
+  const std::size_t stride = (points.size() - 1) / pairs;
+  std::vector<double> steps;
+  steps.reserve(pairs);
+  Vec3 lo = points[0], hi = points[0];
+  for (std::size_t k = 0; k < pairs; ++k) {
+    const Vec3 &a = points[k * stride], &b = points[k * stride + 1];
+    steps.push_back((b - a).norm());
+    lo = lo.cwiseMin(a).cwiseMin(b);
+    hi = hi.cwiseMax(a).cwiseMax(b);
+  }
+  const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), mid, steps.end());
+  return *mid <= kCoherentShare * (hi - lo).norm();
+}
+
+std::vector<std::uint32_t> search_order(const std::vector<Vec3>& points, int threads) {
+  if (!spatially_coherent(points)) return spatial_order(points, threads);
+  std::vector<std::uint32_t> identity(points.size());
+  std::iota(identity.begin(), identity.end(), 0u);
+  return identity;
 }
 
 }  // namespace springscan::analysis

@@ -176,11 +176,22 @@ Expected<DeviationResult> signed_deviation(const std::vector<Vec3>& scan_in_cad,
     // In space order, whatever order the scan came in: the previous point's foot bounds the
     // next point's distance, and that bound prunes the search (SurfaceDistance::closest_within),
     // and neighbouring queries share the BVH nodes in cache. Each point's answer is the same in
-    // any order. A block's points are gathered first and its answers scattered after, in tight
-    // loops whose cache misses overlap (inside the search loop each would stall it).
-    const std::vector<std::uint32_t> order = spatial_order(scan_in_cad, settings.threads);
+    // any order. A shuffled scan's blocks are gathered in space order first and their answers
+    // scattered after, in tight loops whose cache misses overlap (inside the search loop each
+    // would stall it); a scan in scanner lines is in such an order already.
+    const bool coherent = spatially_coherent(scan_in_cad);
+    const std::vector<std::uint32_t> order =
+        coherent ? std::vector<std::uint32_t>{} : spatial_order(scan_in_cad, settings.threads);
     parallel_blocks(
         scan_in_cad.size(), settings.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+          if (coherent) {
+            closest_in_order(
+                *model.distance, begin, end, [&](std::size_t i) { return scan_in_cad[i]; },
+                [&](std::size_t i, const SurfaceHit& hit) {
+                  result.signed_distance_mm[i] = hit.signed_distance_mm;
+                });
+            return;
+          }
           std::vector<Vec3> points(end - begin);
           std::vector<double> distances(end - begin);
           for (std::size_t k = begin; k < end; ++k) points[k - begin] = scan_in_cad[order[k]];

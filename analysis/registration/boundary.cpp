@@ -88,7 +88,7 @@ SurfaceContact contact(const Vec3& q, const KdTree& tree, const std::vector<Vec3
 std::vector<Vec3> free_translations(const std::vector<Vec3>& scan_cad, const KdTree& tree,
                                     const std::vector<Vec3>& normals, const BoundarySettings& s) {
   const std::vector<Vec3> points = strided_sample(scan_cad, s.info_points);
-  const std::vector<std::uint32_t> order = spatial_order(points, s.threads);
+  const std::vector<std::uint32_t> order = search_order(points, s.threads);
   std::vector<SurfaceContact> contacts(points.size());
   parallel_blocks(points.size(), s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t k = begin; k < end; ++k)
@@ -264,7 +264,7 @@ Expected<BoundaryResult> pin_to_boundary(const std::vector<Vec3>& scan, const Tr
   const std::vector<Vec3> free = free_translations(info_scan, model_tree, normals, settings);
   if (free.empty()) return out;
   OrderedScan sample{strided_sample(scan, settings.scan_points), {}};
-  sample.order = spatial_order(sample.points, settings.threads);
+  sample.order = search_order(sample.points, settings.threads);
   const OrientedPoints surface = model_surface(model, settings.model_points);
   for (const Vec3& u : free)
     out.free_directions.push_back(

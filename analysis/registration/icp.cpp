@@ -37,7 +37,7 @@ struct Run {
       : source(points),
         search(finder),
         s(settings),
-        order(spatial_order(points, settings.threads)),
+        order(search_order(points, settings.threads)),
         pairs(points.size()) {
     for (const Vec3& p : source) centroid += p;
     centroid /= static_cast<double>(source.size());

@@ -59,7 +59,7 @@ struct Settled {
 // query starts from its neighbour's answer), whatever the scan's order; the answers are the same.
 std::vector<double> exact_distances(const std::vector<Vec3>& points, const Transform& T,
                                     const SurfaceDistance& exact) {
-  const std::vector<std::uint32_t> order = spatial_order(points, 1);
+  const std::vector<std::uint32_t> order = search_order(points, 1);
   std::vector<Vec3> ordered(points.size());
   for (std::size_t k = 0; k < order.size(); ++k) ordered[k] = T * points[order[k]];
   std::vector<double> d(points.size());

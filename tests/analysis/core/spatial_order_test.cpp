@@ -83,5 +83,25 @@ TEST(SpatialOrder, NeighboursInTheOrderAreNeighboursInSpace) {
   EXPECT_LT(mean_step(points, order), 2.0);
 }
 
+TEST(SpatialOrder, CoherenceOfScanLinesAndOfAShuffle) {
+  std::vector<Vec3> points = shuffled_sheet(50'000, 3);
+  EXPECT_FALSE(spatially_coherent(points));
+  std::vector<std::uint32_t> identity(points.size());
+  std::iota(identity.begin(), identity.end(), 0u);
+  EXPECT_EQ(search_order(points), spatial_order(points));
+  std::vector<Vec3> ordered;
+  for (const std::uint32_t i : spatial_order(points)) ordered.push_back(points[i]);
+  EXPECT_TRUE(spatially_coherent(ordered));
+  // Scanner lines: 0.5 mm apart along y, each along the profile.
+  std::sort(points.begin(), points.end(), [](const Vec3& a, const Vec3& b) {
+    const int la = static_cast<int>(a.y() / 0.5), lb = static_cast<int>(b.y() / 0.5);
+    return la != lb ? la < lb : a.x() + a.z() < b.x() + b.z();
+  });
+  EXPECT_TRUE(spatially_coherent(points));
+  EXPECT_EQ(search_order(points), identity);
+  EXPECT_TRUE(spatially_coherent({}));
+  EXPECT_TRUE(spatially_coherent({Vec3(1, 2, 3)}));
+}
+
 }  // namespace
 }  // namespace springscan::analysis
