@@ -50,7 +50,8 @@ def run(program, names, quick, repetitions):
             "--benchmark_format=json", "--benchmark_min_time=0.001"]
     if quick:
         env["SPRINGSCAN_BENCH_POINTS"] = "20000"
-    else:
+    medians = not quick and repetitions > 1
+    if medians:
         args += [f"--benchmark_repetitions={repetitions}", "--benchmark_report_aggregates_only=true"]
     out = subprocess.run(args, env=env, capture_output=True, text=True, check=False)
     if out.returncode != 0:
@@ -59,7 +60,7 @@ def run(program, names, quick, repetitions):
     for b in json.loads(out.stdout)["benchmarks"]:
         if b.get("error_occurred"):
             sys.exit(f"compare_performance: {b['name']}: {b.get('error_message')}")
-        if not quick and b.get("aggregate_name") != "median":
+        if medians and b.get("aggregate_name") != "median":
             continue
         name = re.sub(r"(/process_time)?(/real_time)?$", "", b.get("run_name", b["name"]))
         results[name] = b

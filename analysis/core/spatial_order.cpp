@@ -82,7 +82,8 @@ bool radix_pass(const std::vector<Keyed>& from, std::vector<Keyed>& to, int shif
 
 std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
   if (points.empty()) return {};
-  const auto [lo, hi] = box(points, threads);
+  const std::pair<Vec3, Vec3> bounds = box(points, threads);  // (clang: no captured bindings)
+  const Vec3 lo = bounds.first, hi = bounds.second;
   const double extent = (hi - lo).maxCoeff();
   const double scale = extent > 0.0 ? double(kAxisMax + 1) / extent : 0.0;
   std::vector<Keyed> keyed(points.size()), other(points.size());
