@@ -159,8 +159,17 @@ IcpPairSearch nearest_point_pairs(const KdTree& tree, const std::vector<Vec3>& n
                                                 std::size_t begin, std::size_t end,
                                                 std::vector<IcpPair>& pairs) {
     for (std::size_t i = begin; i < end; ++i) {
-      const auto hit = tree.nearest(T * source[i], limit);
+      const Vec3 q = T * source[i];
       IcpPair& p = pairs[i];
+      // The point's partner at the previous pose (a tree point) bounds the search: the nearest
+      // lies no farther. The bound only prunes: the search still meets the points at the least
+      // distance in the same order and keeps the first, so the pair is the same.
+      double bound = limit;
+      if (p.valid) {
+        const double d2 = (q - p.point).squaredNorm();
+        if (d2 > 0.0) bound = std::min(limit, std::sqrt(d2) * (1.0 + 1e-9));
+      }
+      const auto hit = tree.nearest(q, bound);
       p.valid = hit.has_value();
       if (!hit) continue;
       p.point = tree.points()[hit->index];

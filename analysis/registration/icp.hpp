@@ -93,7 +93,8 @@ using IcpPairSearch =
                        std::size_t end, std::vector<IcpPair>& pairs)>;
 
 /// The nearest point of `tree` within `max_distance_mm` (0 = no limit), with normals[index]
-/// when `normals` has one per point. Holds references to both.
+/// when `normals` has one per point. Holds references to both. A valid pairs[i] on entry must be
+/// this search's pair from an earlier pose (as icp() keeps them): its distance bounds the search.
 IcpPairSearch nearest_point_pairs(const KdTree& tree, const std::vector<Vec3>& normals,
                                   double max_distance_mm);
 
