@@ -39,6 +39,22 @@ std::string apply_flags(ArgParser& args, v1::ScannerConfig& c) {
       return "--kind " + kind + ": expected laser or tactile";
     }
   }
+  if (args.has("genicam")) {
+    // `--genicam [ID]`: a GenICam profiler through Aravis; the id is the one positional.
+    v1::GenicamConfig* g = c.mutable_genicam();
+    if (args.positionals().size() > 1) return "--genicam takes at most one camera id";
+    if (!args.positionals().empty()) g->set_camera_id(args.positionals().front());
+    if (args.has("line-step")) {
+      const auto step = args.get_number("line-step");
+      if (!step) return args.error();
+      g->set_line_step_mm(*step);
+    }
+    if (args.has("lines")) {
+      const auto lines = args.get_number("lines");
+      if (!lines) return args.error();
+      g->set_scan_lines(static_cast<std::int32_t>(*lines));
+    }
+  }
   if (c.kind() == v1::ScannerConfig::KIND_UNSPECIFIED) c.set_kind(v1::ScannerConfig::LASER_LINE);
   for (const char* name : {"vid", "pid"}) {
     if (!args.has(name)) continue;
@@ -65,8 +81,9 @@ std::string apply_flags(ArgParser& args, v1::ScannerConfig& c) {
 }  // namespace
 
 int scan_main(int argc, char** argv) {
-  ArgParser args(kName, "springscan scan --out scan.ply [options]",
-                 "Runs one scan on the configured scanner (USB, docs/device-protocol.md) and "
+  ArgParser args(kName, "springscan scan --out scan.ply [options] [--genicam [ID]]",
+                 "Runs one scan on the configured scanner (USB or GenICam, "
+                 "docs/device-protocol.md) and "
                  "writes the points in part coordinates. Flags override the config file.");
   args.add_option("out", "FILE", "the scan (.ply, .xyz/.csv/.txt)");
   args.add_option("config", "FILE", "daemon config (protobuf text format); its scanner section");
@@ -75,6 +92,11 @@ int scan_main(int argc, char** argv) {
   args.add_option("pid", "HEX", "USB product id (default 5301 laser, 5302 tactile)");
   args.add_option("serial", "TEXT", "USB serial number; default: the first match");
   args.add_option("timeout", "S", "longest silence between data frames (default 2)");
+  args.add_switch("genicam",
+                  "a GenICam 3D line profiler through Aravis (GigE Vision, USB3 Vision); an id "
+                  "after it (Aravis id or IP address) picks the camera, else the first found");
+  args.add_option("line-step", "MM", "--genicam: travel per line (encoder-triggered lines)");
+  args.add_option("lines", "N", "--genicam: lines the scan acquires (default 500)");
   Logger log;
   if (auto exit_code = args.start(argc, argv, log)) return *exit_code;
   if (!args.has("out")) return fail_with(kName, "--out is required", kExitUsage);

@@ -14,6 +14,7 @@ pkg_check_modules(LIBUSB REQUIRED IMPORTED_TARGET libusb-1.0)
 pkg_check_modules(LIBMODBUS REQUIRED IMPORTED_TARGET libmodbus)
 pkg_check_modules(LIBSYSTEMD REQUIRED IMPORTED_TARGET libsystemd)
 pkg_check_modules(LIBMOSQUITTO REQUIRED IMPORTED_TARGET libmosquitto)
+pkg_check_modules(ARAVIS REQUIRED IMPORTED_TARGET aravis-0.8)  # GenICam cameras (drivers/genicam/)
 # springscand's operator page (daemon/page_server.cpp; docs/operator-page.md: why civetweb).
 # Debian 12's libcivetweb-dev has no .pc file, and its CMake config fails on an executable of
 # another package (/usr/bin/civetweb): the imported target is made here from the header and

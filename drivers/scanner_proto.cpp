@@ -1,5 +1,6 @@
 #include "drivers/scanner_proto.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <variant>
@@ -77,12 +78,54 @@ analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(const v1:
   return s;
 }
 
+analysis::Expected<genicam::GenicamSettings> genicam_settings_from_proto(
+    const v1::ScannerConfig& c) {
+  if (c.kind() == v1::ScannerConfig::TACTILE_PROBE)
+    return fail("scanner.genicam: a GenICam profiler is a laser line scanner, not TACTILE_PROBE");
+  auto laser = laser_settings_from_proto(c);  // the calibration and the timeout, checked
+  if (!laser) return laser.error();
+  const v1::GenicamConfig& g = c.genicam();
+  genicam::GenicamSettings s;
+  s.calibration = laser->calibration;
+  if (c.has_timeout_s()) s.frame_timeout_ms = laser->link.data_timeout_ms;
+  if (g.has_camera_id()) s.camera_id = g.camera_id();
+  if (g.has_pixel_format()) {
+    using F = genicam::RangeFormat;
+    const auto known = {F::kCoord3dC16, F::kCoord3dAbc32f, F::kMono16};
+    const auto found = std::find_if(known.begin(), known.end(),
+                                    [&](F f) { return to_string(f) == g.pixel_format(); });
+    if (found == known.end())
+      return fail("scanner.genicam.pixel_format = '" + g.pixel_format() +
+                  "' (Coord3D_C16, Coord3D_ABC32f or Mono16)");
+    s.pixel_format = *found;
+  }
+  if (g.has_component()) s.component = g.component();
+  if (g.has_output_mode()) s.output_mode = g.output_mode();
+  if (g.has_width()) s.width = g.width();
+  if (g.has_lines_per_frame()) s.lines_per_frame = g.lines_per_frame();
+  if (g.has_scan_lines()) s.scan_lines = g.scan_lines();
+  if (g.has_line_step_mm()) s.line_step_mm = g.line_step_mm();
+  if (g.has_speed_mm_s()) s.speed_mm_s = g.speed_mm_s();
+  if (g.has_line_rate_hz()) s.line_rate_hz = g.line_rate_hz();
+  if (g.has_max_lost_frames()) s.max_lost_frames = g.max_lost_frames();
+  for (const v1::GenicamFeature& f : g.features()) s.features.emplace_back(f.name(), f.value());
+  if (const std::string bad = validate(s); !bad.empty()) return fail("scanner." + bad);
+  return s;
+}
+
 namespace {
 
-// The driver settings for `c.kind`: what make_scanner builds from and check_scanner_config checks.
-using KindSettings = std::variant<LaserScannerSettings, TactileScannerSettings>;
+// The driver settings for the config: what make_scanner builds from and check_scanner_config
+// checks.
+using KindSettings =
+    std::variant<LaserScannerSettings, TactileScannerSettings, genicam::GenicamSettings>;
 
 analysis::Expected<KindSettings> settings_for_kind(const v1::ScannerConfig& c) {
+  if (c.has_genicam()) {
+    auto s = genicam_settings_from_proto(c);
+    if (!s) return s.error();
+    return KindSettings(std::move(*s));
+  }
   switch (c.kind()) {
     case v1::ScannerConfig::KIND_UNSPECIFIED:  // the default kind, like the other defaults
     case v1::ScannerConfig::LASER_LINE: {
@@ -113,6 +156,8 @@ analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfi
   if (!settings) return settings.error();
   if (const auto* laser = std::get_if<LaserScannerSettings>(&*settings))
     return std::unique_ptr<Scanner>(std::make_unique<LaserLineScanner>(*laser));
+  if (auto* genicam = std::get_if<genicam::GenicamSettings>(&*settings))
+    return std::unique_ptr<Scanner>(std::make_unique<genicam::GenicamScanner>(std::move(*genicam)));
   return std::unique_ptr<Scanner>(
       std::make_unique<TactileProbeScanner>(std::get<TactileScannerSettings>(*settings)));
 }

@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "analysis/core/expected.hpp"
+#include "drivers/genicam/genicam_scanner.hpp"
 #include "drivers/laser_scanner.hpp"
 #include "drivers/tactile_scanner.hpp"
 #include "proto/springscan.pb.h"
@@ -18,10 +19,16 @@ analysis::Expected<LaserScannerSettings> laser_settings_from_proto(const v1::Sca
 analysis::Expected<TactileScannerSettings> tactile_settings_from_proto(
     const v1::ScannerConfig& config);
 
-/// The driver for `config.kind` (LASER_LINE, the default when unset, or TACTILE_PROBE), not yet
-/// opened: it opens the device on first use and again after an unplug. The only way from a
-/// config to a driver: the daemon (daemon/main.cpp) and `springscan scan` both call it, so the
-/// laser calibration and t_part_machine reach every scan. Errors name the field and the value.
+/// GenICam settings from the config's genicam section, with laser_calibration and timeout_s.
+/// Errors name the field and the value.
+analysis::Expected<genicam::GenicamSettings> genicam_settings_from_proto(
+    const v1::ScannerConfig& config);
+
+/// The driver for a genicam section (a GenICam profiler through Aravis), else for `config.kind`
+/// (LASER_LINE, the default when unset, or TACTILE_PROBE), not yet opened: it opens the device on
+/// first use and again after an unplug. The only way from a config to a driver: the daemon
+/// (daemon/main.cpp) and `springscan scan` both call it, so the laser calibration and
+/// t_part_machine reach every scan. Errors name the field and the value.
 analysis::Expected<std::unique_ptr<Scanner>> make_scanner(const v1::ScannerConfig& config);
 
 /// The error make_scanner(config) would return, without constructing a driver (no libusb

@@ -15,6 +15,8 @@ packages=(
   libusb-1.0-0-dev libmodbus-dev libsystemd-dev libmosquitto-dev
   # springscand's operator page (docs/operator-page.md: why civetweb).
   libcivetweb-dev
+  # GenICam 3D line profilers over GigE Vision / USB3 Vision (drivers/genicam/).
+  libaravis-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   umockdev libumockdev-dev libglib2.0-dev
 )

@@ -1,0 +1,98 @@
+#pragma once
+// A simulated GenICam 3D line profiler: Aravis's fake GigE Vision camera on a loopback address,
+// described by simulators/genicam_camera.xml (the SFNC Scan3d features), its frames filled with
+// range lines of a simulated laser scan (simulators/parts/laser_scan.hpp) as the part passes
+// under it. The driver talks to it over real GVCP/GVSP (UDP), as to a profiler on the plant
+// network. Faults: the camera vanishes after a number of lines (and may come back).
+//
+// One camera per address: GigE Vision's control port (3956) is fixed, so tests that start one
+// on 127.0.0.1 take the CTest resource lock "genicam_gvcp".
+
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "analysis/core/expected.hpp"
+#include "simulators/parts/laser_scan.hpp"
+
+namespace springscan::simulators {
+
+/// A scan as range lines: line k (along the motion) at y0_mm + k * dy_mm, column i (along the
+/// laser line) at x0_mm + i * dx_mm; range is measured down from the head (head z - point z).
+struct RangeImage {
+  int width = 0;  ///< columns
+  int lines = 0;  ///< rows
+  double x0_mm = 0.0;
+  double dx_mm = 1.0;
+  double y0_mm = 0.0;
+  double dy_mm = 1.0;
+  std::vector<float> range_mm;  ///< lines * width; NaN: no return there
+};
+
+/// The scan of `scan` (view -z, lines along x, T_scan_part as scanned) seen by a head at height
+/// `head_z_mm`. Errors: an empty scan, spacings of zero.
+analysis::Expected<RangeImage> range_image(const parts::LaserScan& scan, double head_z_mm);
+
+/// The CAD part `cad_file` produced with `springback_deg` per bend (Bend::id), scanned with
+/// `scan` and seen from `head_z_mm`: what the simulated profiler sends.
+analysis::Expected<RangeImage> part_range_image(const std::string& cad_file,
+                                                const std::vector<double>& springback_deg,
+                                                const parts::LaserScanSettings& scan,
+                                                double head_z_mm);
+
+struct GenicamCameraSettings {
+  std::string interface_address = "127.0.0.1";  ///< where the camera listens (GVCP port 3956)
+  std::string genicam_xml;                      ///< the description (genicam_camera.xml)
+  std::string serial = "SIM-GENICAM-1";
+  int frame_period_us = 2000;   ///< time between frames
+  int lines_per_frame = 16;     ///< Height at start (the driver sets its own)
+  double scale_c_mm = 0.004;    ///< Scan3dCoordinateScale of C (range): 16 bits cover 262 mm
+  double offset_c_mm = 60.0;    ///< Scan3dCoordinateOffset of C
+  /// >= 0: the camera vanishes (stops answering, as on a power loss) once this many lines of a
+  /// scan were sent.
+  std::int64_t vanish_after_lines = -1;
+  double return_after_s = -1.0;  ///< >= 0: a vanished camera is back after this long (healthy)
+};
+
+/// The running camera. Thread safety: all members may be called from any thread.
+class GenicamCamera {
+ public:
+  static analysis::Expected<std::unique_ptr<GenicamCamera>> start(GenicamCameraSettings settings,
+                                                                  RangeImage image);
+  ~GenicamCamera();
+  GenicamCamera(const GenicamCamera&) = delete;
+  GenicamCamera& operator=(const GenicamCamera&) = delete;
+
+  bool present() const { return present_.load(); }
+  std::int64_t scans_started() const { return scans_.load(); }
+  const RangeImage& image() const { return image_; }
+  const GenicamCameraSettings& settings() const { return settings_; }
+
+  /// The fill of one frame (called by Aravis's camera thread); public for the C callback.
+  void fill(std::uint8_t* data, std::uint32_t width, std::uint32_t height, std::uint32_t format);
+
+ private:
+  GenicamCamera(GenicamCameraSettings settings, RangeImage image);
+  analysis::Expected<bool> open_camera();
+  void watch();
+
+  GenicamCameraSettings settings_;
+  RangeImage image_;
+  std::mutex mutex_;  // the Aravis camera object, opened and closed by watch()
+  void* camera_ = nullptr;  // ArvGvFakeCamera (GObject, kept out of this header)
+  std::atomic<bool> present_{false};
+  std::atomic<bool> vanish_{false};
+  std::atomic<bool> restart_{true};  // the next frame starts a new pass of the part
+  std::atomic<bool> stop_{false};
+  std::atomic<std::int64_t> scans_{0};
+  std::int64_t cursor_ = 0;  // the next line of the image (camera thread only)
+  bool vanished_once_ = false;
+  std::thread watcher_;
+};
+
+}  // namespace springscan::simulators
