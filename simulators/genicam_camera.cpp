@@ -40,6 +40,8 @@ void fill_pattern(ArvBuffer* buffer, void* self, guint32, guint32, ArvPixelForma
 
 }  // namespace
 
+std::string default_genicam_xml() { return SPRINGSCAN_GENICAM_XML; }
+
 analysis::Expected<RangeImage> range_image(const parts::LaserScan& scan, double head_z_mm) {
   const auto& points = scan.cloud.points;
   if (points.empty()) return analysis::fail("range_image: the scan has no points");
@@ -68,8 +70,8 @@ analysis::Expected<RangeImage> range_image(const parts::LaserScan& scan, double 
                         std::numeric_limits<float>::quiet_NaN());
   for (const auto& p : points) {
     const auto [c, r] = node(p);
-    float& cell = image.range_mm[std::size_t(r - r0) * std::size_t(image.width) +
-                                 std::size_t(c - c0)];
+    float& cell =
+        image.range_mm[std::size_t(r - r0) * std::size_t(image.width) + std::size_t(c - c0)];
     const auto range = static_cast<float>(head_z_mm - p.z());
     if (std::isnan(cell) || range < cell) cell = range;  // the nearest return wins
   }
@@ -163,8 +165,9 @@ void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t 
         std::memcpy(data, abc_raw, sizeof abc_raw);
         data += sizeof abc_raw;
       } else {
-        put_u16(data, std::isnan(r) ? 0 : static_cast<std::uint16_t>(
-                                              std::clamp(std::lround(raw), 1L, 65535L)));
+        put_u16(data, std::isnan(r)
+                          ? 0
+                          : static_cast<std::uint16_t>(std::clamp(std::lround(raw), 1L, 65535L)));
         data += 2;
       }
     }
@@ -192,7 +195,8 @@ void GenicamCamera::watch() {
     }
     if (gv == nullptr) {
       const double waited = std::chrono::duration<double>(Clock::now() - vanished_at).count();
-      if (settings_.return_after_s >= 0.0 && waited >= settings_.return_after_s) {
+      if (bring_back_.exchange(false) ||
+          (settings_.return_after_s >= 0.0 && waited >= settings_.return_after_s)) {
         lock.unlock();
         (void)open_camera();  // a port still held is retried on the next round
       }

@@ -45,14 +45,17 @@ analysis::Expected<RangeImage> part_range_image(const std::string& cad_file,
                                                 const parts::LaserScanSettings& scan,
                                                 double head_z_mm);
 
+/// simulators/genicam_camera.xml in the checkout this was built from.
+std::string default_genicam_xml();
+
 struct GenicamCameraSettings {
-  std::string interface_address = "127.0.0.1";  ///< where the camera listens (GVCP port 3956)
-  std::string genicam_xml;                      ///< the description (genicam_camera.xml)
+  std::string interface_address = "127.0.0.1";      ///< where the camera listens (GVCP port 3956)
+  std::string genicam_xml = default_genicam_xml();  ///< the description
   std::string serial = "SIM-GENICAM-1";
-  int frame_period_us = 2000;   ///< time between frames
-  int lines_per_frame = 16;     ///< Height at start (the driver sets its own)
-  double scale_c_mm = 0.004;    ///< Scan3dCoordinateScale of C (range): 16 bits cover 262 mm
-  double offset_c_mm = 60.0;    ///< Scan3dCoordinateOffset of C
+  int frame_period_us = 2000;  ///< time between frames
+  int lines_per_frame = 16;    ///< Height at start (the driver sets its own)
+  double scale_c_mm = 0.004;   ///< Scan3dCoordinateScale of C (range): 16 bits cover 262 mm
+  double offset_c_mm = 60.0;   ///< Scan3dCoordinateOffset of C
   /// >= 0: the camera vanishes (stops answering, as on a power loss) once this many lines of a
   /// scan were sent.
   std::int64_t vanish_after_lines = -1;
@@ -69,6 +72,8 @@ class GenicamCamera {
   GenicamCamera& operator=(const GenicamCamera&) = delete;
 
   bool present() const { return present_.load(); }
+  /// A vanished camera is back (healthy) at once, as when its power returns.
+  void bring_back() { bring_back_ = true; }
   std::int64_t scans_started() const { return scans_.load(); }
   const RangeImage& image() const { return image_; }
   const GenicamCameraSettings& settings() const { return settings_; }
@@ -83,12 +88,13 @@ class GenicamCamera {
 
   GenicamCameraSettings settings_;
   RangeImage image_;
-  std::mutex mutex_;  // the Aravis camera object, opened and closed by watch()
+  std::mutex mutex_;        // the Aravis camera object, opened and closed by watch()
   void* camera_ = nullptr;  // ArvGvFakeCamera (GObject, kept out of this header)
   std::atomic<bool> present_{false};
   std::atomic<bool> vanish_{false};
   std::atomic<bool> restart_{true};  // the next frame starts a new pass of the part
   std::atomic<bool> stop_{false};
+  std::atomic<bool> bring_back_{false};
   std::atomic<std::int64_t> scans_{0};
   std::int64_t cursor_ = 0;  // the next line of the image (camera thread only)
   bool vanished_once_ = false;

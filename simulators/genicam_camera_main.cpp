@@ -38,7 +38,6 @@ bool number(const char* text, double& out) {
 
 int main(int argc, char** argv) {
   simulators::GenicamCameraSettings camera;
-  camera.genicam_xml = SPRINGSCAN_GENICAM_XML;
   parts::LaserScanSettings scan;
   scan.line_spacing_mm = 1.0;
   scan.noise_sigma_mm = 0.02;

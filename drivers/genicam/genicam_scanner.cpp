@@ -102,8 +102,11 @@ class GenicamScanner::Camera {
   /// A register round trip: false when the camera no longer answers.
   bool responds() {
     if (lost()) return false;
+    // Address 0 is a bootstrap register of both transports (GigE Vision's version, USB3
+    // Vision's GenCP version); read raw, since Aravis may answer a feature from its cache.
     GError* error = nullptr;
-    arv_device_get_integer_feature_value(device_, "Width", &error);
+    guint32 value = 0;
+    arv_device_read_register(device_, 0x0, &value, &error);
     const bool ok = error == nullptr;
     g_clear_error(&error);
     return ok;
@@ -151,9 +154,9 @@ analysis::Expected<DeviceInfo> GenicamScanner::identify() {
   camera_ = std::move(camera);
   DeviceInfo info;
   info.kind = "laser_line";
-  for (auto [field, feature] : {std::pair{&info.model, "DeviceModelName"},
-                                std::pair{&info.serial, "DeviceSerialNumber"},
-                                std::pair{&info.firmware, "DeviceVersion"}}) {
+  for (auto [field, feature] :
+       {std::pair{&info.model, "DeviceModelName"}, std::pair{&info.serial, "DeviceSerialNumber"},
+        std::pair{&info.firmware, "DeviceVersion"}}) {
     if (!camera_->has(feature)) continue;
     if (auto v = camera_->get_string(feature)) *field = *v;
   }
@@ -206,9 +209,9 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::scan(const ScanProgress
   // The camera's scale and offset per coordinate, and its distance unit.
   RangeScaling scaling;
   const bool abc = settings_.pixel_format == RangeFormat::kCoord3dAbc32f;
-  for (auto [coordinate, name] : {std::pair{&scaling.a, "CoordinateA"},
-                                  std::pair{&scaling.b, "CoordinateB"},
-                                  std::pair{&scaling.c, "CoordinateC"}}) {
+  for (auto [coordinate, name] :
+       {std::pair{&scaling.a, "CoordinateA"}, std::pair{&scaling.b, "CoordinateB"},
+        std::pair{&scaling.c, "CoordinateC"}}) {
     if (coordinate == &scaling.b && !abc) continue;
     if (auto set = cam.set("Scan3dCoordinateSelector", name); !set) return set.error();
     auto scale = cam.get_float("Scan3dCoordinateScale");
@@ -260,7 +263,8 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
   const std::string who = cam.who();
   GError* error = nullptr;
   const guint payload = arv_camera_get_payload(cam.camera(), &error);
-  if (error != nullptr) return fail(ErrorCode::kProtocolError, who + ": PayloadSize: " + take(error));
+  if (error != nullptr)
+    return fail(ErrorCode::kProtocolError, who + ": PayloadSize: " + take(error));
   StreamPtr stream(arv_camera_create_stream(cam.camera(), nullptr, nullptr, &error));
   if (!stream) return fail(ErrorCode::kOsError, who + ": no stream (" + take(error) + ")");
   for (int i = 0; i < settings_.buffers; ++i)
@@ -275,8 +279,9 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
                   who + ": gone " + what + " (no answer on the control channel)");
     }
     arv_camera_stop_acquisition(cam.camera(), nullptr);
-    return fail(ErrorCode::kTimeout, who + ": no frame for " +
-                                         std::to_string(settings_.frame_timeout_ms) + " ms " + what);
+    return fail(
+        ErrorCode::kTimeout,
+        who + ": no frame for " + std::to_string(settings_.frame_timeout_ms) + " ms " + what);
   };
   arv_camera_start_acquisition(cam.camera(), &error);
   if (error != nullptr) {
@@ -308,10 +313,10 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
     if (!complete) ++outcome.lost_frames;
     if (outcome.lost_frames > settings_.max_lost_frames) {
       arv_camera_stop_acquisition(cam.camera(), nullptr);
-      return fail(ErrorCode::kSequenceGap,
-                  who + ": " + std::to_string(outcome.lost_frames) + " frame(s) lost by line " +
-                      std::to_string(next_line) + " (max_lost_frames " +
-                      std::to_string(settings_.max_lost_frames) + ")");
+      return fail(ErrorCode::kSequenceGap, who + ": " + std::to_string(outcome.lost_frames) +
+                                               " frame(s) lost by line " +
+                                               std::to_string(next_line) + " (max_lost_frames " +
+                                               std::to_string(settings_.max_lost_frames) + ")");
     }
     if (!complete) {
       next_line += settings_.lines_per_frame;
@@ -327,14 +332,14 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
       arv_camera_stop_acquisition(cam.camera(), nullptr);
       return fail(ErrorCode::kProtocolError, who + ": frame " + std::to_string(id) + ": " + bad);
     }
-    outcome.points += append_range_lines(frame, scaling, settings_.calibration, step_mm,
-                                         cloud.points);
+    outcome.points +=
+        append_range_lines(frame, scaling, settings_.calibration, step_mm, cloud.points);
     ++outcome.frames;
     next_line += height;
     if (progress && !progress(double(std::min(next_line, lines)) / double(lines))) {
       arv_camera_stop_acquisition(cam.camera(), nullptr);
-      return fail(ErrorCode::kCancelled, who + ": scan cancelled at line " +
-                                             std::to_string(next_line));
+      return fail(ErrorCode::kCancelled,
+                  who + ": scan cancelled at line " + std::to_string(next_line));
     }
   }
   arv_camera_stop_acquisition(cam.camera(), &error);

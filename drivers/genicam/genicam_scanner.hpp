@@ -22,10 +22,10 @@ struct GenicamSettings {
   int width = 0;                    ///< points per line (Width); 0: as the camera is
   int lines_per_frame = 16;         ///< lines per frame (Height)
   int scan_lines = 500;             ///< lines one scan acquires
-  double line_step_mm = 0.0;  ///< travel per line (an encoder-triggered line); 0: from speed
-  double speed_mm_s = 0.0;    ///< travel speed, with the line rate, when line_step_mm is 0
-  double line_rate_hz = 0.0;  ///< lines per second; 0: the camera's AcquisitionLineRate
-  int max_lost_frames = 0;    ///< frames a scan may lose (their lines stay empty), then it fails
+  double line_step_mm = 0.0;        ///< travel per line (an encoder-triggered line); 0: from speed
+  double speed_mm_s = 0.0;          ///< travel speed, with the line rate, when line_step_mm is 0
+  double line_rate_hz = 0.0;        ///< lines per second; 0: the camera's AcquisitionLineRate
+  int max_lost_frames = 0;      ///< frames a scan may lose (their lines stay empty), then it fails
   int frame_timeout_ms = 2000;  ///< longest wait for the next frame
   int buffers = 16;             ///< stream buffers queued to Aravis
   /// Further features, set by name in this order before the scan (ExposureTime, ...).

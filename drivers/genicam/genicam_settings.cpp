@@ -23,7 +23,8 @@ std::string validate(const GenicamSettings& s) {
   if (s.line_step_mm == 0.0 && s.speed_mm_s == 0.0)
     return "genicam: set line_step_mm (lines triggered by an encoder) or speed_mm_s (with the "
            "line rate) so that lines have their place along the motion";
-  if (s.max_lost_frames < 0) return "genicam.max_lost_frames = " + std::to_string(s.max_lost_frames);
+  if (s.max_lost_frames < 0)
+    return "genicam.max_lost_frames = " + std::to_string(s.max_lost_frames);
   if (s.frame_timeout_ms < 1) return "genicam frame timeout must be positive";
   if (s.buffers < 2 || s.buffers > 1024)
     return "genicam.buffers = " + std::to_string(s.buffers) + " (2..1024)";

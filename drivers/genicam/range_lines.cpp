@@ -43,9 +43,8 @@ std::size_t append_c16(const RangeFrameView& f, const RangeScaling& s, const Las
   return kept;
 }
 
-std::size_t append_abc32f(const RangeFrameView& f, const RangeScaling& s,
-                          const LaserCalibration& c, double line_step_mm,
-                          std::vector<analysis::Vec3>& out) {
+std::size_t append_abc32f(const RangeFrameView& f, const RangeScaling& s, const LaserCalibration& c,
+                          double line_step_mm, std::vector<analysis::Vec3>& out) {
   const std::size_t start = out.size();
   out.resize(start + std::size_t(f.width) * f.height);
   analysis::Vec3* dst = out.data() + start;
@@ -97,8 +96,7 @@ std::string validate(const RangeFrameView& f) {
   const std::size_t need = std::size_t(f.width) * f.height * pixel_bytes(f.format);
   if (f.data == nullptr || f.size < need)
     return "frame of " + std::to_string(f.size) + " bytes, " + std::to_string(f.width) + " x " +
-           std::to_string(f.height) + " " + to_string(f.format) + " needs " +
-           std::to_string(need);
+           std::to_string(f.height) + " " + to_string(f.format) + " needs " + std::to_string(need);
   return "";
 }
 

@@ -45,7 +45,6 @@ GenicamSettings driver_settings() {
 }
 
 std::unique_ptr<simulators::GenicamCamera> start(simulators::GenicamCameraSettings s = {}) {
-  s.genicam_xml = s.genicam_xml.empty() ? SPRINGSCAN_GENICAM_XML : s.genicam_xml;
   s.frame_period_us = 1000;
   auto camera = simulators::GenicamCamera::start(s, test_image());
   if (!camera) ADD_FAILURE() << camera.message();
@@ -93,7 +92,7 @@ TEST(GenicamScanner, ScansTheSimulatedProfilerOverGigEVision) {
 TEST(GenicamScanner, CameraGoneMidScanIsDeviceGoneAndComesBack) {
   simulators::GenicamCameraSettings s;
   s.vanish_after_lines = 16;  // after two of the five frames
-  s.return_after_s = 3.0;  // after the driver has given up on it (timeout + no answer)
+  s.return_after_s = 3.0;     // after the driver has given up on it (timeout + no answer)
   auto camera = start(s);
   ASSERT_TRUE(camera);
   GenicamScanner scanner(driver_settings());
@@ -112,7 +111,7 @@ TEST(GenicamScanner, CameraGoneMidScanIsDeviceGoneAndComesBack) {
 }
 
 TEST(GenicamScanner, MissingFeatureIsNamed) {
-  std::ifstream in(SPRINGSCAN_GENICAM_XML);
+  std::ifstream in(simulators::default_genicam_xml());
   std::stringstream xml;
   xml << in.rdbuf();
   std::string text = xml.str();

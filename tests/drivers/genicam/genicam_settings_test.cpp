@@ -42,8 +42,8 @@ TEST(GenicamSettings, FromConfig) {
 }
 
 TEST(GenicamSettings, BadFieldsAreNamed) {
-  const auto bad_format = genicam_settings_from_proto(
-      parse("genicam { pixel_format: \"Mono8\" line_step_mm: 1 }"));
+  const auto bad_format =
+      genicam_settings_from_proto(parse("genicam { pixel_format: \"Mono8\" line_step_mm: 1 }"));
   ASSERT_FALSE(bad_format);
   EXPECT_NE(bad_format.message().find("pixel_format = 'Mono8'"), std::string::npos);
   const auto no_motion = check_scanner_config(parse("genicam { camera_id: \"x\" }"));

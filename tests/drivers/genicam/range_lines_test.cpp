@@ -88,8 +88,8 @@ TEST(RangeLines, InvalidPixelsAreDroppedOnlyWhenTheFlagIsSet) {
 TEST(RangeLines, Abc32fDropsNanAndInvalidAndAddsBAlongTheMotion) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::vector<std::uint8_t> bytes;
-  const float abc[4][3] = {{1.5f, 0.0f, 40.0f}, {2.5f, 0.5f, nan}, {3.5f, 0.0f, -1.0f},
-                           {4.5f, 0.25f, 42.0f}};
+  const float abc[4][3] = {
+      {1.5f, 0.0f, 40.0f}, {2.5f, 0.5f, nan}, {3.5f, 0.0f, -1.0f}, {4.5f, 0.25f, 42.0f}};
   for (const auto& p : abc)
     for (float v : p) put_f32(bytes, v);
   RangeScaling s;

@@ -1,0 +1,115 @@
+// Hardware in the loop with a GenICam profiler (issue 33): springscand configured with
+// `scanner { genicam { } }` drives the simulated profiler (simulators/genicam_camera.hpp),
+// hosted in this test process and reached over real GigE Vision on 127.0.0.1, while the
+// simulated PLC runs the handshake. The profiler scans the demo hat as produced with a known
+// springback (simulators/parts/laser_scan.hpp); the verdict and the springback must come out
+// as for the USB head (hil_test.cpp), and a profiler that vanishes mid-scan must take the USB
+// unplug's path (hil_fault_test.cpp) with the station serving again once it is back.
+#include <csignal>
+
+#include "hil_rig.hpp"
+#include "simulators/genicam_camera.hpp"
+
+namespace springscan::daemon {
+namespace {
+
+// Uniform, within the demo's 1 degree tolerance: the truth does not depend on how the CAD
+// file numbers its bends.
+const std::vector<double> kSpringback(4, 0.4);
+
+class GenicamHilTest : public testing::HilTest {
+ protected:
+  /// Starts the profiler scanning the hat and writes the daemon's config for it.
+  void start_camera(simulators::GenicamCameraSettings camera = {}) {
+    parts::LaserScanSettings scan;
+    scan.line_spacing_mm = 1.0;  // 1 mm between lines, 1 mm between points: ~11000 points
+    scan.noise_sigma_mm = 0.02;
+    auto image = simulators::part_range_image(
+        springscan::test_paths::source("demo/hat-profile.step"), kSpringback, scan, 200.0);
+    ASSERT_TRUE(image) << image.message();
+    camera.frame_period_us = 2000;
+    auto started = simulators::GenicamCamera::start(camera, std::move(*image));
+    ASSERT_TRUE(started) << started.message();
+    camera_ = std::move(*started);
+    write_genicam_config(camera_->image());
+  }
+
+  // As HilTest::write_config, with the profiler for a scanner. The motion origin is where the
+  // simulated part's first line lies (a station measures it when it calibrates the head).
+  void write_genicam_config(const simulators::RangeImage& image) const {
+    std::ofstream(config_path())
+        << "modbus { bind_address: \"127.0.0.1\" port: 0 allowed_clients: \"127.0.0.1\" }\n"
+        << "scanner { timeout_s: 1\n"
+        << "  laser_calibration { origin_mm { x: 0 y: " << image.y0_mm << " z: 200 } }\n"
+        << "  genicam { camera_id: \"127.0.0.1\" line_step_mm: " << image.dy_mm
+        << " scan_lines: " << image.lines << " lines_per_frame: 16 } }\n"
+        << "parts { part_id: 1 name: \"demo hat profile\" cad_file: \""
+        << springscan::test_paths::source("demo/hat-profile.step")
+        << "\"\n  settings { verdict { tolerance_mm: 0.5 angle_tolerance_deg: 1 } } }\n"
+        << "report_dir: \"" << reports() << "\"\nmodel_cache_dir: \"" << dir_.str()
+        << "/model-cache\"\nlog_level: \"warning\"\n";
+  }
+
+  std::unique_ptr<testing::DaemonProcess> start_genicam_daemon() const {
+    return std::make_unique<testing::DaemonProcess>(springscan::test_paths::kSpringscand,
+                                                    config_path(), dir_.str(),
+                                                    std::vector<std::string>{});
+  }
+
+  std::unique_ptr<simulators::GenicamCamera> camera_;
+};
+
+TEST_F(GenicamHilTest, TriggerToVerdictThroughGigEVision) {
+  start_camera();
+  auto daemon = start_genicam_daemon();
+  auto client = plc(daemon->port());
+  wait_online(*client);
+  auto cycle = client->run_cycle(1, 1);
+  ASSERT_TRUE(cycle.ok()) << cycle.message();
+  EXPECT_EQ(cycle->result.code, regs::ResultCode::kOk);
+  EXPECT_TRUE(cycle->part_ok);
+  const v1::InspectionReport r = report(1);
+  expect_springback(r, kSpringback, 0.1);
+  expect_registers_match(cycle->result, r);
+  EXPECT_EQ(camera_->scans_started(), 1);
+  EXPECT_EQ(daemon->stop(SIGTERM), 0);
+}
+
+TEST_F(GenicamHilTest, CameraGoneMidScanIsTheUnplugPathAndTheStationServesAgain) {
+  simulators::GenicamCameraSettings camera;
+  camera.vanish_after_lines = 32;  // two of the five frames, then no answer
+  start_camera(camera);
+  auto daemon = start_genicam_daemon();
+  auto client = plc(daemon->port());
+  wait_online(*client);
+  auto failed = client->run_cycle(1, 1, false);
+  ASSERT_TRUE(failed.ok()) << failed.message();
+  EXPECT_EQ(failed->result.code, regs::ResultCode::kScanFailed);
+  EXPECT_FALSE(failed->part_ok);
+  EXPECT_EQ(failed->error_code, static_cast<std::uint16_t>(regs::ErrorCode::kScanFailed));
+  auto status = client->read_status();
+  ASSERT_TRUE(status.ok());
+  EXPECT_EQ(status->live[regs::kIrState], static_cast<std::uint16_t>(regs::State::kFault));
+  EXPECT_EQ(status->live[regs::kIrErrorDetail],
+            static_cast<std::uint16_t>(regs::ErrorDetail::kDeviceGone));
+  const v1::InspectionReport scan_failed = report(1);
+  ASSERT_GE(scan_failed.verdict().reasons_size(), 1);
+  EXPECT_NE(scan_failed.verdict().reasons(0).find("scan failed"), std::string::npos);
+  wait_online(*client, false);  // the daemon closed it and does not find it
+  ASSERT_TRUE(client->acknowledge().ok());
+
+  // The camera is back; the daemon reopens it, and after ERROR_RESET the next part passes.
+  camera_->bring_back();
+  wait_online(*client);
+  ASSERT_TRUE(client->reset_errors().ok());
+  auto next = client->run_cycle(2, 1);
+  ASSERT_TRUE(next.ok()) << next.message();
+  EXPECT_EQ(next->result.seq, 2);
+  EXPECT_EQ(next->result.code, regs::ResultCode::kOk);
+  expect_springback(report(2), kSpringback, 0.1);
+  EXPECT_EQ(record_count(), 2);  // the failed scan's record is kept
+  EXPECT_EQ(daemon->stop(SIGTERM), 0);
+}
+
+}  // namespace
+}  // namespace springscan::daemon
