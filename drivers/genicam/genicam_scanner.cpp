@@ -292,54 +292,60 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
   GenicamOutcome outcome;
   outcome.line_step_mm = step_mm;
   analysis::PointCloud cloud;
+  // Frame k of the scan (k from the block ids, so that a lost or late frame leaves its lines
+  // empty and the others in place) holds lines k * H .. k * H + H - 1.
   const std::int64_t lines = settings_.scan_lines;
-  std::int64_t next_line = 0;
+  const std::int64_t per_frame = settings_.lines_per_frame;
+  const std::int64_t frames_needed = (lines + per_frame - 1) / per_frame;
   std::optional<std::uint64_t> previous_id;
-  while (next_line < lines) {
+  std::int64_t index = 0, covered = 0;  // this frame's index; frames up to the newest one
+  while (covered < frames_needed) {
     ArvBuffer* buffer = arv_stream_timeout_pop_buffer(
         stream.get(), static_cast<guint64>(settings_.frame_timeout_ms) * 1000u);
     if (buffer == nullptr)
-      return silent("at line " + std::to_string(next_line) + " of " + std::to_string(lines));
+      return silent("at line " + std::to_string(covered * per_frame) + " of " +
+                    std::to_string(lines));
     QueuedBack back{stream.get(), buffer};
-    const std::uint64_t id = arv_buffer_get_frame_id(buffer);
-    const auto height = std::int64_t(arv_buffer_get_image_height(buffer));
-    if (previous_id) {
-      const auto lost = static_cast<std::int64_t>(frames_lost_between(*previous_id, id));
-      outcome.lost_frames += lost;
-      next_line += lost * settings_.lines_per_frame;
-    }
+    std::uint64_t id = arv_buffer_get_frame_id(buffer);
+    // A GigE Vision frame so damaged that its block id is lost comes as id 0 (never valid):
+    // it is the one after the previous.
+    if (id == 0 && previous_id) id = *previous_id == 0xFFFF ? 1 : *previous_id + 1;
+    index = previous_id ? index + block_id_step(*previous_id, id) : 0;
     previous_id = id;
+    covered = std::max(covered, index + 1);
     const bool complete = arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS;
-    if (!complete) ++outcome.lost_frames;
-    if (outcome.lost_frames > settings_.max_lost_frames) {
+    if (complete && index >= 0 && index < frames_needed) {
+      RangeFrameView frame;
+      frame.format = static_cast<RangeFormat>(arv_buffer_get_image_pixel_format(buffer));
+      frame.data = static_cast<const std::uint8_t*>(arv_buffer_get_data(buffer, &frame.size));
+      frame.width = static_cast<std::uint32_t>(arv_buffer_get_image_width(buffer));
+      frame.first_line = index * per_frame;
+      frame.height = static_cast<std::uint32_t>(
+          std::min(std::int64_t(arv_buffer_get_image_height(buffer)), lines - frame.first_line));
+      if (const std::string bad = validate(frame); !bad.empty()) {
+        arv_camera_stop_acquisition(cam.camera(), nullptr);
+        return fail(ErrorCode::kProtocolError, who + ": frame " + std::to_string(id) + ": " + bad);
+      }
+      outcome.points +=
+          append_range_lines(frame, scaling, settings_.calibration, step_mm, cloud.points);
+      ++outcome.frames;
+    }
+    // Frames still missing; a late one may still come, so the limit is final at the end. Far
+    // more missing than the stream has buffers cannot all be late.
+    outcome.lost_frames = std::min(covered, frames_needed) - outcome.frames;
+    if (outcome.lost_frames > settings_.max_lost_frames + settings_.buffers ||
+        (covered >= frames_needed && outcome.lost_frames > settings_.max_lost_frames)) {
       arv_camera_stop_acquisition(cam.camera(), nullptr);
       return fail(ErrorCode::kSequenceGap, who + ": " + std::to_string(outcome.lost_frames) +
-                                               " frame(s) lost by line " +
-                                               std::to_string(next_line) + " (max_lost_frames " +
+                                               " frame(s) of " + std::to_string(per_frame) +
+                                               " lines lost (max_lost_frames " +
                                                std::to_string(settings_.max_lost_frames) + ")");
     }
-    if (!complete) {
-      next_line += settings_.lines_per_frame;
-      continue;
-    }
-    RangeFrameView frame;
-    frame.format = static_cast<RangeFormat>(arv_buffer_get_image_pixel_format(buffer));
-    frame.data = static_cast<const std::uint8_t*>(arv_buffer_get_data(buffer, &frame.size));
-    frame.width = static_cast<std::uint32_t>(arv_buffer_get_image_width(buffer));
-    frame.height = static_cast<std::uint32_t>(std::min(height, lines - next_line));
-    frame.first_line = next_line;
-    if (const std::string bad = validate(frame); !bad.empty()) {
-      arv_camera_stop_acquisition(cam.camera(), nullptr);
-      return fail(ErrorCode::kProtocolError, who + ": frame " + std::to_string(id) + ": " + bad);
-    }
-    outcome.points +=
-        append_range_lines(frame, scaling, settings_.calibration, step_mm, cloud.points);
-    ++outcome.frames;
-    next_line += height;
-    if (progress && !progress(double(std::min(next_line, lines)) / double(lines))) {
+    const double done = double(std::min(covered * per_frame, lines)) / double(lines);
+    if (progress && !progress(done)) {
       arv_camera_stop_acquisition(cam.camera(), nullptr);
       return fail(ErrorCode::kCancelled,
-                  who + ": scan cancelled at line " + std::to_string(next_line));
+                  who + ": scan cancelled at " + std::to_string(int(done * 100.0)) + " %");
     }
   }
   arv_camera_stop_acquisition(cam.camera(), &error);
@@ -350,7 +356,7 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
       return fail(ErrorCode::kDeviceGone, who + ": gone at the end of the scan");
     }
   }
-  outcome.lines = std::min(next_line, lines);
+  outcome.lines = lines;
   outcome_ = outcome;
   return cloud;
 }

@@ -108,12 +108,16 @@ std::size_t append_range_lines(const RangeFrameView& frame, const RangeScaling& 
   return append_c16(frame, scaling, calibration, line_step_mm, out);
 }
 
-std::uint64_t frames_lost_between(std::uint64_t previous, std::uint64_t current) {
-  if (current > previous) return current - previous - 1;
-  // A 16-bit GigE Vision block id wrapped: 65535 is followed by 1.
-  if (current < previous && previous <= 0xFFFF && current >= 1)
-    return (0xFFFF - previous) + (current - 1);
-  return 0;  // the same id again: nothing known to be lost
+std::int64_t block_id_step(std::uint64_t previous, std::uint64_t current) {
+  if (previous > 0xFFFF || current > 0xFFFF)
+    return static_cast<std::int64_t>(current) - static_cast<std::int64_t>(previous);
+  // On the ring 1..65535: the shorter way round, forward or back.
+  constexpr std::int64_t kRing = 0xFFFF;
+  std::int64_t step =
+      (static_cast<std::int64_t>(current) - static_cast<std::int64_t>(previous)) % kRing;
+  if (step > kRing / 2) step -= kRing;
+  if (step < -kRing / 2) step += kRing;
+  return step;
 }
 
 }  // namespace springscan::drivers::genicam

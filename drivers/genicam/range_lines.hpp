@@ -68,8 +68,9 @@ std::size_t append_range_lines(const RangeFrameView& frame, const RangeScaling& 
                                const LaserCalibration& calibration, double line_step_mm,
                                std::vector<analysis::Vec3>& out);
 
-/// Frames lost between two received block ids `previous` and `current` (GigE Vision's 16-bit
-/// block ids skip 0 when they wrap; USB3 Vision's are 64-bit and never wrap in practice).
-std::uint64_t frames_lost_between(std::uint64_t previous, std::uint64_t current);
+/// How many frames `current` comes after `previous` (1: the next one; 3: two lost between;
+/// negative: an earlier frame arriving late). GigE Vision's 16-bit block ids run 1..65535 and
+/// skip 0 when they wrap; USB3 Vision's are 64-bit.
+std::int64_t block_id_step(std::uint64_t previous, std::uint64_t current);
 
 }  // namespace springscan::drivers::genicam

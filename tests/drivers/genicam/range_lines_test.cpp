@@ -130,12 +130,15 @@ TEST(RangeLines, EmptyAndShortFrames) {
   EXPECT_NE(validate(view(static_cast<RangeFormat>(0x01080001), bytes, 1, 1)), "");  // Mono8
 }
 
-TEST(RangeLines, FramesLostBetweenBlockIds) {
-  EXPECT_EQ(frames_lost_between(5, 6), 0u);
-  EXPECT_EQ(frames_lost_between(5, 9), 3u);
-  EXPECT_EQ(frames_lost_between(65535, 1), 0u);  // GigE Vision wraps past 0
-  EXPECT_EQ(frames_lost_between(65534, 2), 2u);  // 65535 and 1 lost
-  EXPECT_EQ(frames_lost_between(7, 7), 0u);
+TEST(RangeLines, BlockIdSteps) {
+  EXPECT_EQ(block_id_step(5, 6), 1);
+  EXPECT_EQ(block_id_step(5, 9), 4);       // three lost between
+  EXPECT_EQ(block_id_step(65535, 1), 1);   // GigE Vision wraps past 0
+  EXPECT_EQ(block_id_step(65534, 2), 3);   // 65535 and 1 lost
+  EXPECT_EQ(block_id_step(1, 65535), -1);  // late, across the wrap
+  EXPECT_EQ(block_id_step(102, 101), -1);  // late
+  EXPECT_EQ(block_id_step(7, 7), 0);
+  EXPECT_EQ(block_id_step(70000, 70003), 3);  // USB3 Vision's 64-bit ids
 }
 
 }  // namespace
