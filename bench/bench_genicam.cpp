@@ -35,14 +35,14 @@ void BM_GenicamConvertC16(benchmark::State& state) {
   std::int64_t line = 0;
   for (auto _ : state) {
     out.clear();
-    const g::RangeFrameView frame{g::RangeFormat::kCoord3dC16, bytes.data(), bytes.size(), width,
-                                  height, line};
+    const g::RangeFrameView frame{
+        g::RangeFormat::kCoord3dC16, bytes.data(), bytes.size(), width, height, line};
     benchmark::DoNotOptimize(g::append_range_lines(frame, scaling, calibration, 0.1, out));
     line += height;
   }
   state.SetItemsProcessed(state.iterations() * height);  // lines
-  state.counters["points/s"] = benchmark::Counter(double(state.iterations()) * width * height,
-                                                  benchmark::Counter::kIsRate);
+  state.counters["points/s"] =
+      benchmark::Counter(double(state.iterations()) * width * height, benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_GenicamConvertC16)->Arg(1024)->Arg(2048);
 
@@ -89,7 +89,8 @@ void BM_GenicamLoopbackScan(benchmark::State& state) {
 BENCHMARK(BM_GenicamLoopbackScan)
     ->ArgsProduct({{1024, 2048}, {4000, 2000, 1000, 500}})
     ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()->Iterations(5);
+    ->UseRealTime()
+    ->Iterations(5);
 
 }  // namespace
 

@@ -138,11 +138,32 @@ void log_calibration(const springscan::daemon::DaemonSettings& settings,
                  : std::string("no check part (check_part { }): calibration drift is not watched"));
 }
 
+// --check with a GenICam profiler: it must answer and have every feature the driver uses (a
+// USB head is only looked for when the station runs: it may be plugged in later).
+bool check_genicam_camera(const springscan::v1::ScannerConfig& config,
+                          springscan::daemon::Log& log) {
+  if (!config.has_genicam()) return true;
+  auto scanner = springscan::drivers::make_scanner(config);
+  if (!scanner) {
+    log.error("scanner: " + scanner.message());
+    return false;
+  }
+  const auto info = (*scanner)->identify();
+  if (!info) {
+    log.error("scanner: " + info.message());
+    return false;
+  }
+  log.info("scanner: GenICam camera " + info->model + " serial " + info->serial +
+           " has every feature the driver uses");
+  return true;
+}
+
 // --check: the config was valid; every CAD file must load too. Exit status 0 or 2.
 int check_config(const std::string& config_path, const springscan::daemon::DaemonSettings& settings,
                  springscan::daemon::Log& log) {
   log_calibration(settings, log);
   if (!check_part_models(settings.parts, log)) return 2;
+  if (!check_genicam_camera(settings.scanner, log)) return 2;
   const springscan::daemon::MqttSettings& mqtt = settings.mqtt;
   log.info(config_path + ": config OK" +
            (mqtt.enabled ? "; results published to MQTT broker " + mqtt.host + ":" +

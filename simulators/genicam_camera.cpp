@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -136,6 +138,8 @@ analysis::Expected<bool> GenicamCamera::open_camera() {
     arv_fake_camera_write_register(fake, kInvalidFlag + 4 * k, k == 2 ? 1 : 0);
     write_double(fake, kInvalidValue + 8 * k, 0.0);  // C16: raw 0 is "no return"
   }
+  fake_ = fake;
+  stream_port_ = -1;
   arv_fake_camera_set_fill_pattern(fake, fill_pattern, this);
   std::lock_guard lock(mutex_);
   camera_ = gv;
@@ -146,9 +150,21 @@ analysis::Expected<bool> GenicamCamera::open_camera() {
 
 void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t height,
                          std::uint32_t format) {
-  if (restart_.exchange(false)) {
+  // Each scan opens a new stream (a new UDP port): a new destination is a new pass of the part
+  // too, should watch() have missed the stop between two scans on a loaded machine.
+  int port = 0;
+  if (GSocketAddress* to = arv_fake_camera_get_stream_address(static_cast<ArvFakeCamera*>(fake_))) {
+    port = g_inet_socket_address_get_port(G_INET_SOCKET_ADDRESS(to));
+    g_object_unref(to);
+  }
+  const bool new_stream = port != stream_port_;
+  stream_port_ = port;
+  if (restart_.exchange(false) || new_stream) {
     cursor_ = 0;
     ++scans_;
+    if (std::getenv("SPRINGSCAN_GENICAM_SIM_DEBUG") != nullptr)
+      std::fprintf(stderr, "genicam sim: scan %lld starts\n",
+                   static_cast<long long>(scans_.load()));
   }
   const auto& s = settings_;
   const bool abc = format == 0x026000C0;  // Coord3D_ABC32f; else C16 or Mono16
@@ -176,7 +192,13 @@ void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t 
   if (s.vanish_after_lines >= 0 && cursor_ >= s.vanish_after_lines && !vanished_once_) {
     vanished_once_ = true;
     vanish_ = true;
+    // No frame after this one: hold Aravis's camera thread here until watch() tears the camera
+    // down (which waits for this thread, then closes the sockets).
+    while (!closing_.load() && !stop_.load())
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
+  if (std::getenv("SPRINGSCAN_GENICAM_SIM_DEBUG") != nullptr)
+    std::fprintf(stderr, "genicam sim: filled up to line %lld\n", static_cast<long long>(cursor_));
 }
 
 void GenicamCamera::watch() {
@@ -187,7 +209,9 @@ void GenicamCamera::watch() {
     std::unique_lock lock(mutex_);
     auto* gv = static_cast<ArvGvFakeCamera*>(camera_);
     if (gv != nullptr && vanish_.exchange(false)) {
-      g_object_unref(gv);  // closes its sockets: no answer on GVCP, no more frames
+      closing_ = true;
+      g_object_unref(gv);
+      closing_ = false;  // closes its sockets: no answer on GVCP, no more frames
       camera_ = nullptr;
       present_ = false;
       vanished_at = Clock::now();

@@ -95,8 +95,11 @@ class GenicamCamera {
   std::atomic<bool> restart_{true};  // the next frame starts a new pass of the part
   std::atomic<bool> stop_{false};
   std::atomic<bool> bring_back_{false};
+  std::atomic<bool> closing_{false};  // watch() is tearing the vanished camera down
   std::atomic<std::int64_t> scans_{0};
   std::int64_t cursor_ = 0;  // the next line of the image (camera thread only)
+  void* fake_ = nullptr;     // ArvFakeCamera of camera_
+  int stream_port_ = -1;     // where the frames went last (camera thread only)
   bool vanished_once_ = false;
   std::thread watcher_;
 };

@@ -306,6 +306,9 @@ analysis::Expected<analysis::PointCloud> GenicamScanner::acquire(const RangeScal
       return silent("at line " + std::to_string(covered * per_frame) + " of " +
                     std::to_string(lines));
     QueuedBack back{stream.get(), buffer};
+    // A buffer Aravis hands back unwritten (seen on loopback under load as the acquisition
+    // starts, block ids 0, 1, ...) carries no frame: it neither counts nor moves the index.
+    if (arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_CLEARED) continue;
     std::uint64_t id = arv_buffer_get_frame_id(buffer);
     // A GigE Vision frame so damaged that its block id is lost comes as id 0 (never valid):
     // it is the one after the previous.

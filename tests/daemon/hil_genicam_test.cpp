@@ -6,6 +6,7 @@
 // as for the USB head (hil_test.cpp), and a profiler that vanishes mid-scan must take the USB
 // unplug's path (hil_fault_test.cpp) with the station serving again once it is back.
 #include <csignal>
+#include <sstream>
 
 #include "hil_rig.hpp"
 #include "simulators/genicam_camera.hpp"
@@ -36,12 +37,14 @@ class GenicamHilTest : public testing::HilTest {
 
   // As HilTest::write_config, with the profiler for a scanner. The motion origin is where the
   // simulated part's first line lies (a station measures it when it calibrates the head).
-  void write_genicam_config(const simulators::RangeImage& image) const {
+  void write_genicam_config(const simulators::RangeImage& image,
+                            const std::string& motion = "") const {
     std::ofstream(config_path())
         << "modbus { bind_address: \"127.0.0.1\" port: 0 allowed_clients: \"127.0.0.1\" }\n"
         << "scanner { timeout_s: 1\n"
         << "  laser_calibration { origin_mm { x: 0 y: " << image.y0_mm << " z: 200 } }\n"
-        << "  genicam { camera_id: \"127.0.0.1\" line_step_mm: " << image.dy_mm
+        << "  genicam { camera_id: \"127.0.0.1\" "
+        << (motion.empty() ? "line_step_mm: " + std::to_string(image.dy_mm) : motion)
         << " scan_lines: " << image.lines << " lines_per_frame: 16 } }\n"
         << "parts { part_id: 1 name: \"demo hat profile\" cad_file: \""
         << springscan::test_paths::source("demo/hat-profile.step")
@@ -73,6 +76,42 @@ TEST_F(GenicamHilTest, TriggerToVerdictThroughGigEVision) {
   expect_registers_match(cycle->result, r);
   EXPECT_EQ(camera_->scans_started(), 1);
   EXPECT_EQ(daemon->stop(SIGTERM), 0);
+}
+
+// springscand --check opens the camera: present and complete, absent, lacking a feature.
+TEST_F(GenicamHilTest, CheckReportsAnAbsentCameraAndAMissingFeatureByName) {
+  const std::string check =
+      std::string(springscan::test_paths::kSpringscand) + " --check --config " + config_path();
+  simulators::RangeImage image;
+  image.width = 10;
+  image.lines = 4;
+  image.range_mm.assign(40, 150.0f);
+  write_genicam_config(image);
+  const auto [absent_status, absent] = testing::run_command(check);
+  EXPECT_NE(absent_status, 0);
+  EXPECT_NE(absent.find("genicam camera '127.0.0.1': not found"), std::string::npos) << absent;
+
+  std::ifstream in(simulators::default_genicam_xml());
+  std::stringstream xml;
+  xml << in.rdbuf();
+  std::string text = xml.str();
+  const std::string line_rate = "Name=\"AcquisitionLineRate\"";  // speed_mm_s needs it
+  text.replace(text.find(line_rate), line_rate.size(), "Name=\"LineRateRenamed\"");
+  const std::string path = dir_.str() + "/no-line-rate.xml";
+  std::ofstream(path) << text;
+  simulators::GenicamCameraSettings settings;
+  settings.genicam_xml = path;
+  auto camera = simulators::GenicamCamera::start(settings, image);
+  ASSERT_TRUE(camera) << camera.message();
+  write_genicam_config(image, "speed_mm_s: 100");  // the line rate from the camera
+  const auto [missing_status, missing] = testing::run_command(check);
+  EXPECT_NE(missing_status, 0);
+  EXPECT_NE(missing.find("lacks the GenICam feature(s) AcquisitionLineRate"), std::string::npos)
+      << missing;
+
+  write_genicam_config(image);
+  const auto [ok_status, ok] = testing::run_command(check);
+  EXPECT_EQ(ok_status, 0) << ok;
 }
 
 TEST_F(GenicamHilTest, CameraGoneMidScanIsTheUnplugPathAndTheStationServesAgain) {
