@@ -6,8 +6,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 
@@ -162,9 +160,6 @@ void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t 
   if (restart_.exchange(false) || new_stream) {
     cursor_ = 0;
     ++scans_;
-    if (std::getenv("SPRINGSCAN_GENICAM_SIM_DEBUG") != nullptr)
-      std::fprintf(stderr, "genicam sim: scan %lld starts\n",
-                   static_cast<long long>(scans_.load()));
   }
   const auto& s = settings_;
   const bool abc = format == 0x026000C0;  // Coord3D_ABC32f; else C16 or Mono16
@@ -197,8 +192,6 @@ void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t 
     while (!closing_.load() && !stop_.load())
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  if (std::getenv("SPRINGSCAN_GENICAM_SIM_DEBUG") != nullptr)
-    std::fprintf(stderr, "genicam sim: filled up to line %lld\n", static_cast<long long>(cursor_));
 }
 
 void GenicamCamera::watch() {

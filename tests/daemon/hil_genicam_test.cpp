@@ -8,6 +8,7 @@
 #include <csignal>
 #include <sstream>
 
+#include "analysis/io/point_io.hpp"
 #include "hil_rig.hpp"
 #include "simulators/genicam_camera.hpp"
 
@@ -76,6 +77,34 @@ TEST_F(GenicamHilTest, TriggerToVerdictThroughGigEVision) {
   expect_registers_match(cycle->result, r);
   EXPECT_EQ(camera_->scans_started(), 1);
   EXPECT_EQ(daemon->stop(SIGTERM), 0);
+}
+
+// `springscan scan --genicam ID` writes the profiler's scan: every valid pixel, in place.
+TEST_F(GenicamHilTest, CliScanWritesThePly) {
+  simulators::RangeImage image;
+  image.width = 20;
+  image.lines = 32;
+  image.x0_mm = -5.0;
+  image.dx_mm = 0.5;
+  for (int k = 0; k < image.width * image.lines; ++k)
+    image.range_mm.push_back(k % 5 == 0 ? NAN : float(100.0 + 0.01 * k));
+  auto camera = simulators::GenicamCamera::start({}, image);
+  ASSERT_TRUE(camera) << camera.message();
+  const std::string out = dir_.str() + "/genicam.ply";
+  const auto [status, output] =
+      testing::run_command(std::string(springscan::test_paths::kSpringscan) +
+                           " scan --genicam 127.0.0.1 --line-step 0.25 --lines 32 --out " + out);
+  ASSERT_EQ(status, 0) << output;
+  auto cloud = analysis::read_point_cloud(out);
+  ASSERT_TRUE(cloud) << cloud.message();
+  ASSERT_EQ(cloud->size(), std::size_t(image.width * image.lines * 4 / 5));
+  for (const auto& p : cloud->points) {  // default head: 200 mm above, moving along +y
+    const int i = static_cast<int>(std::lround((p.x() + 5.0) / 0.5));
+    const int line = static_cast<int>(std::lround(p.y() / 0.25));
+    const int k = line * image.width + i;
+    ASSERT_TRUE(i >= 0 && i < image.width && line >= 0 && line < image.lines && k % 5 != 0);
+    ASSERT_NEAR(p.z(), 200.0 - (100.0 + 0.01 * k), 0.0021);
+  }
 }
 
 // springscand --check opens the camera: present and complete, absent, lacking a feature.
