@@ -297,7 +297,7 @@ const std::vector<Vec3>& normals_of(const PointCloud& scan) {
   return scan.normals.size() == scan.size() ? scan.normals : kNoNormals;
 }
 
-// The scan points the exact-surface updates pair (global_fit.hpp, finish_on_exact_surface): an
+// The scan points the exact-surface updates pair (global_fit.hpp, finish_best_fit): an
 // evenly strided sample of `count`, with the scan's normals when it has them. A points-only
 // scan of a solid lends a point the normal of its nearest fit point (estimated there and turned
 // toward the scanner's viewpoint, fit_point_normals), so that the facing rule holds: without
@@ -324,6 +324,55 @@ FacingSample exact_update_points(const PointCloud& scan, const PointCloud& fit_p
     out.normals.push_back(n);
   }
   return out;
+}
+
+// The fit's points for the least-squares updates on the samples (finish_best_fit): all of them
+// with their normals, but for a points-only scan of a solid those whose estimated normal faces
+// the scanner's viewpoint within 60 deg (as exact_update_points). A standing wall's estimated
+// normal may point to either skin, and with no share trimmed its points pulled the motor
+// bracket's frame 0.5 mm toward the other skin; the trimmed ICP before had left them out.
+FacingSample facing_fit_points(const PointCloud& scan, const PointCloud& fit_points,
+                               const std::vector<Vec3>& fit_normals, const Vec3& viewpoint) {
+  if (!normals_of(scan).empty() || fit_normals.empty())
+    return FacingSample{fit_points.points, fit_normals};
+  constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
+  FacingSample out;
+  for (std::size_t i = 0; i < fit_points.size(); ++i) {
+    const Vec3& p = fit_points.points[i];
+    if (fit_normals[i].dot((viewpoint - p).normalized()) < kMinFacingViewpoint) continue;
+    out.points.push_back(p);
+    out.normals.push_back(fit_normals[i]);
+  }
+  return out;
+}
+
+// The chosen pose's last updates, the paper's best fit (global_fit.hpp final_iterations): least
+// squares over the whole seen surface, no share trimmed, paired as the fit before (on the exact
+// surface with `exact_points` where the samples are biased, on the samples with the fit's points
+// elsewhere); then the part's ends pin what the surface leaves free, as after the first fit.
+// Only now: the rival orientations were compared on trimmed fits, where a near-symmetric part's
+// few telling points weigh (untrimmed, the side panel's half turn scored within 0.1 %).
+Expected<BoundaryResult> least_squares_best_fit(
+    const PointCloud& scan, const ReductionOutcome& reduced, const std::vector<Vec3>& fit_normals,
+    const PartModel& model, const KdTree& model_tree, const SurfaceDistance* exact_updates,
+    const FacingSample& exact_points, const PipelineSettings& config, GlobalFitResult& fit) {
+  const FacingSample points =
+      exact_updates
+          ? exact_points
+          : facing_fit_points(scan, reduced.scan_for_fit, fit_normals, config.normals.viewpoint);
+  IcpResult polished = fit.icp;
+  polished.T_target_source = fit.T_cad_scan;
+  if (auto error = finish_best_fit(points.points, points.normals, exact_updates, model_tree,
+                                   model.samples.normals, config.global_fit,
+                                   config.global_fit.final_iterations,
+                                   config.global_fit.final_trimmed_fraction, polished))
+    return *error;
+  fit.icp = std::move(polished);
+  auto pinned = pin_to_boundary(scan.points, fit.icp.T_target_source, model, model_tree,
+                                config.global_fit.boundary);
+  if (!pinned) return pinned.error();
+  fit.T_cad_scan = pinned->T_cad_scan;
+  return pinned;
 }
 
 // True when a bend's inner radius is below the model samples' spacing: there a scan point's
@@ -406,26 +455,31 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
           ? exact_update_points(scan, reduced->scan_for_fit, *fit_normals,
                                 config->normals.viewpoint, config->global_fit.exact_points)
           : FacingSample{};
-  if (auto error = finish_on_exact_surface(exact_points.points, exact_points.normals, exact_updates,
-                                           config->global_fit, fit->icp))
+  if (auto error = finish_best_fit(exact_points.points, exact_points.normals, exact_updates,
+                                   model_tree, model.samples.normals, config->global_fit,
+                                   config->global_fit.exact_iterations,
+                                   config->global_fit.icp.trimmed_fraction, fit->icp))
     return *error;
-  if (exact_updates) {  // the fit's figures follow its pose
-    fit->T_cad_scan = fit->icp.T_target_source;
-    fit->rms_final_mm =
-        rms_nearest_distance(reduced->scan_for_fit.points, fit->T_cad_scan, model_tree,
-                             config->global_fit.icp.trimmed_fraction, config->threads);
-  }
+  fit->T_cad_scan = fit->icp.T_target_source;
   // The part's ends fix what the surface leaves free (registration/boundary.hpp).
   auto pinned =
       pin_to_boundary(scan.points, fit->T_cad_scan, model, model_tree, config->global_fit.boundary);
   if (!pinned) return pinned.error();
   fit->T_cad_scan = pinned->T_cad_scan;
-  // A near-symmetric part's rival orientations compared on converged fits.
+  // A near-symmetric part's rival orientations compared on converged fits (trimmed alike).
   pinned = settle_orientation(
       {reduced->scan_for_fit.points, *fit_normals, scan.points, exact_points.points,
        exact_points.normals, model, model_tree, exact_updates},
       config->global_fit, *fit, std::move(*pinned));
   if (!pinned) return pinned.error();
+  // The pose chosen, its last updates are the paper's best fit: least squares over the whole
+  // seen surface, no share trimmed (global_fit.hpp final_trimmed_fraction), then the ends again.
+  pinned = least_squares_best_fit(scan, *reduced, *fit_normals, model, model_tree, exact_updates,
+                                  exact_points, *config, *fit);
+  if (!pinned) return pinned.error();
+  fit->rms_final_mm =
+      rms_nearest_distance(reduced->scan_for_fit.points, fit->T_cad_scan, model_tree,
+                           config->global_fit.icp.trimmed_fraction, config->threads);
   to_proto(*fit, config->global_fit, report.mutable_global_fit());
   to_proto(pinned->free_directions, report.mutable_global_fit());
   for (const auto& warning : fit->warnings) report.add_warnings(warning);

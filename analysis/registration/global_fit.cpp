@@ -108,37 +108,34 @@ Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model
              start, settings.icp);
 }
 
-namespace {
-
-Expected<IcpResult> exact_surface_icp(const std::vector<Vec3>& scan,
-                                      const std::vector<Vec3>& scan_normals,
-                                      const SurfaceDistance& exact, const Transform& start,
-                                      const GlobalFitSettings& settings) {
-  IcpSettings on_surface = settings.icp;
-  on_surface.max_iterations = settings.exact_iterations;
-  auto fit = icp(
-      scan, exact_surface_pairs(exact, scan_normals, settings.icp.max_correspondence_distance_mm),
-      start, on_surface);
-  if (!fit) return fit.error().prepend("global fit: on the exact surface: ");
-  return fit;
-}
-
-}  // namespace
-
-std::optional<Error> finish_on_exact_surface(const std::vector<Vec3>& scan,
-                                             const std::vector<Vec3>& scan_normals,
-                                             const SurfaceDistance* exact,
-                                             const GlobalFitSettings& settings, IcpResult& fit) {
-  if (!exact || settings.exact_iterations <= 0) return std::nullopt;
-  auto more = exact_surface_icp(scan, scan_normals, *exact, fit.T_target_source, settings);
-  if (!more) return more.error();
+std::optional<Error> finish_best_fit(const std::vector<Vec3>& scan,
+                                     const std::vector<Vec3>& scan_normals,
+                                     const SurfaceDistance* exact, const KdTree& model_tree,
+                                     const std::vector<Vec3>& model_normals,
+                                     const GlobalFitSettings& settings, int iterations,
+                                     double trimmed_fraction, IcpResult& fit) {
+  if (iterations <= 0 || scan.empty()) return std::nullopt;
+  GlobalFitSettings last = settings;
+  last.icp.max_iterations = iterations;
+  last.icp.trimmed_fraction = trimmed_fraction;
+  auto more =
+      exact
+          ? icp(scan,
+                exact_surface_pairs(*exact, scan_normals, last.icp.max_correspondence_distance_mm),
+                fit.T_target_source, last.icp)
+          : final_icp(scan, model_tree, model_normals, fit.T_target_source, last, scan_normals);
+  if (!more)
+    return more.error().prepend(exact ? "global fit: on the exact surface: "
+                                      : "global fit: least-squares updates: ");
   fit.T_target_source = more->T_target_source;
   fit.iterations += more->iterations;
-  fit.error_history.insert(fit.error_history.end(), more->error_history.begin(),
-                           more->error_history.end());
+  // Its first entry is the error it started from, the last of `fit`'s own (on other pairs).
+  if (!more->error_history.empty())
+    fit.error_history.insert(fit.error_history.end(), more->error_history.begin() + 1,
+                             more->error_history.end());
   fit.inliers = more->inliers;
   fit.converged = more->converged;
-  fit.stop_reason = more->stop_reason + " (on the exact surface)";
+  fit.stop_reason = more->stop_reason + (exact ? " (on the exact surface)" : " (least squares)");
   return std::nullopt;
 }
 

@@ -29,11 +29,19 @@ struct GlobalFitSettings {
                                         ///< (OrientationChoice::ambiguity), (0, 1]
   OrientationSettings orientation;      ///< the finalists compared on the full model
   IcpSettings icp;                      ///< the final ICP
-  int exact_iterations = 3;             ///< then at most this many updates paired on the exact
-                                        ///< CAD surface, when there is one (0: none)
-  std::size_t exact_points = 20'000;    ///< ... on this many of the scan's own points (strided;
-                                        ///< the pipeline picks them)
-  BoundarySettings boundary;            ///< free directions fixed by the part's ends (pipeline)
+  int exact_iterations = 3;  ///< then at most this many updates paired on the exact CAD surface,
+                             ///< where the samples are biased (0: none; the pipeline's)
+  /// The pose chosen, at most this many least-squares updates (finish_best_fit; the pipeline's),
+  /// leaving out this share of the farthest pairs (outliers beyond the correspondence distance
+  /// are left out and the Huber kernel bounds the rest). 0: the paper's best fit, the least
+  /// squares over the whole seen surface. A share trimmed there is the most deformed surface,
+  /// not outliers: 10 % pulled the frame of a U profile with 2.5 deg of springback 0.35 mm
+  /// toward its unsprung part (docs/alignment.md, "The best fit of a sprung part").
+  int final_iterations = 10;
+  double final_trimmed_fraction = 0.0;
+  std::size_t exact_points = 20'000;  ///< the exact-surface updates run on this many of the
+                                      ///< scan's own points (strided; the pipeline picks them)
+  BoundarySettings boundary;          ///< free directions fixed by the part's ends (pipeline)
 };
 
 struct GlobalFitResult {
@@ -70,20 +78,24 @@ Expected<IcpResult> final_icp(const std::vector<Vec3>& scan, const KdTree& model
                               const GlobalFitSettings& settings,
                               const std::vector<Vec3>& scan_normals = {});
 
-/// `fit` continued from its pose by at most settings.exact_iterations ICP updates whose pairs
-/// are the exact CAD surface's closest points and normals (`exact`; nothing when it is null or
-/// exact_iterations is 0), on `scan`: the caller's sample of the scan's own points (the
-/// pipeline's is settings.exact_points of them, evenly strided), with `scan_normals` one per
-/// point for the facing rule, or empty. A sample's tangent plane lies off
-/// the surface by about d^2 / 2R at a distance d from a radius R, always toward the convex side:
-/// at a closed hem's 0.05 mm fold that biased the cover flange's fit by 0.16 deg and 0.16 mm
-/// (docs/alignment.md). The scan's own points, not the fit's voxel centroids: on a solid scanned
-/// all round a voxel holds both skins, and its centroid lies mid-sheet. `fit` then has the new
-/// pose, inliers and stop, and the iterations and error history of both. Errors: ICP's.
-std::optional<Error> finish_on_exact_surface(const std::vector<Vec3>& scan,
-                                             const std::vector<Vec3>& scan_normals,
-                                             const SurfaceDistance* exact,
-                                             const GlobalFitSettings& settings, IcpResult& fit);
+/// `fit` continued from its pose by at most `iterations` ICP updates (`trimmed_fraction` of the
+/// farthest pairs left out, the rest as settings.icp) on `scan`, with `scan_normals` one per point
+/// for the facing rule, or empty. With `exact` (not null), the pairs are the exact CAD surface's
+/// closest points and normals, and `scan` is the caller's sample of the scan's own points (the
+/// pipeline's is settings.exact_points of them, evenly strided): a sample's tangent plane lies
+/// off the surface by about d^2 / 2R at a distance d from a radius R, always toward the convex
+/// side; at a closed hem's 0.05 mm fold that biased the cover flange's fit by 0.16 deg and
+/// 0.16 mm (docs/alignment.md). The scan's own points, not the fit's voxel centroids: on a
+/// solid scanned all round a voxel holds both skins, and its centroid lies mid-sheet. Without
+/// `exact`, the pairs are the model samples' (final_icp), and `scan` the fit's points. `fit` then
+/// has the new pose, inliers and stop, and the iterations and error history of both. Errors:
+/// ICP's.
+std::optional<Error> finish_best_fit(const std::vector<Vec3>& scan,
+                                     const std::vector<Vec3>& scan_normals,
+                                     const SurfaceDistance* exact, const KdTree& model_tree,
+                                     const std::vector<Vec3>& model_normals,
+                                     const GlobalFitSettings& settings, int iterations,
+                                     double trimmed_fraction, IcpResult& fit);
 
 /// Root mean square nearest distance of T * points to the tree, mm, over the closest
 /// (1 - trimmed_fraction) of the points (parallel, deterministic).

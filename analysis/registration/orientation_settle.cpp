@@ -309,8 +309,10 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
         errors[k] = icp_fit.message();
         return;
       }
-      if (auto e = finish_on_exact_surface(in.exact_points, in.exact_normals, in.exact_updates,
-                                           serial, *icp_fit)) {
+      if (auto e = finish_best_fit(in.exact_points, in.exact_normals, in.exact_updates,
+                                   in.model_tree, in.model.samples.normals, serial,
+                                   in.exact_updates ? serial.exact_iterations : 0,
+                                   serial.icp.trimmed_fraction, *icp_fit)) {
         errors[k] = e->message;
         return;
       }

@@ -35,7 +35,7 @@ struct OrientationSettleInput {
   const PartModel& model;                  ///< with its exact distance; without, nothing is settled
   const KdTree& model_tree;                ///< over model.samples.points
   /// The exact distance when the global fit ended with its updates on the exact surface
-  /// (finish_on_exact_surface), so that the rivals end alike; null: they did not.
+  /// (finish_best_fit), so that the rivals end alike; null: they did not.
   const SurfaceDistance* exact_updates = nullptr;
 };
 

@@ -136,6 +136,25 @@ FieldScenario random_springback(const parts::CadPart& cad, std::uint32_t seed) {
   return sc;
 }
 
+// The bends this scan cannot measure by its construction: closed hems, and bends with a flange
+// the scan does not see (fewer true scan points on its faces than the 50 a plane fit needs,
+// counted from the simulator's face of every point, not from the report).
+std::set<int> unmeasurable_by_construction(const FieldRun& run, const parts::CadPart& cad) {
+  constexpr int kPlaneFitPoints = 50;
+  std::map<int, int> seen_on_face;
+  for (int face : run.scan_faces)
+    if (face >= 0) ++seen_on_face[face];
+  std::map<int, int> seen_on_flange;
+  for (const Flange& f : cad.model.segmentation.flanges)
+    for (int face : f.face_ids) seen_on_flange[f.id] += seen_on_face[face];
+  std::set<int> out;
+  for (const parts::BendTruth& b : run.bends)
+    if (b.hem || seen_on_flange[b.parent_flange] < kPlaneFitPoints ||
+        seen_on_flange[b.child_flange] < kPlaneFitPoints)
+      out.insert(b.bend_id);
+  return out;
+}
+
 struct BendCheck {
   int measured = 0;
   double worst = 0.0;                ///< largest |springback error| of a measured bend, deg
@@ -143,10 +162,12 @@ struct BendCheck {
 };
 
 // Every bend of the report against the produced part's truth: a closed hem listed as not
-// measurable and passing, a bend without an angle saying why, every measured bend within
+// measurable and passing, a bend without an angle saying why, exactly the bends the scan could
+// not measure by construction (`unmeasurable`) without an angle, every other one measured within
 // `bound` of its constructed springback and judged by the verdict as its truth is (where the
 // truth is farther than `bound` from the limit).
-BendCheck check_bends(const FieldRun& run, double bound, const std::string& what) {
+BendCheck check_bends(const FieldRun& run, const std::set<int>& unmeasurable, double bound,
+                      const std::string& what) {
   BendCheck out;
   const auto& bends = run.report.bends();
   for (const parts::BendTruth& truth : run.bends) {
@@ -158,6 +179,8 @@ BendCheck check_bends(const FieldRun& run, double bound, const std::string& what
       EXPECT_FALSE(it->measurable()) << what << " bend " << truth.bend_id << " is a closed hem";
       EXPECT_TRUE(it->pass()) << what << ": a closed hem never fails the part by itself";
     }
+    EXPECT_EQ(it->measured(), unmeasurable.count(truth.bend_id) == 0)
+        << what << " bend " << truth.bend_id << ": " << it->status();
     if (!it->measured()) {
       EXPECT_FALSE(it->status().empty()) << what << " bend " << truth.bend_id << " says why not";
       std::printf("  %s bend %d (%.1f deg): %s\n", what.c_str(), truth.bend_id,
@@ -180,23 +203,22 @@ BendCheck check_bends(const FieldRun& run, double bound, const std::string& what
   return out;
 }
 
-// A global fit that two orientations fit alike is reported ambiguous: its bends may belong to
-// the part turned over (the side panel's half turn), and the verdict must fail for it. False
-// then: the bends are not checked against the truth.
-bool fit_is_trusted(const FieldRun& run, const std::string& what) {
-  if (!run.report.global_fit().ambiguous()) return true;
-  std::printf("%s: the global fit is reported ambiguous (%s, ratio %.3f), the part fails\n",
-              what.c_str(), run.report.global_fit().orientation_decided_by().c_str(),
-              run.report.global_fit().orientation_ambiguity());
-  EXPECT_FALSE(run.report.verdict().pass()) << what << ": an ambiguous fit never passes";
-  return false;
+// The passes of these cases see what tells every part from its turned copy (tilted about the
+// diagonal, or from below): the fit must find the part, never report it ambiguous. Only the
+// cases that build the symmetric view (the side panel's notched wall edge-on) may.
+bool expect_found(const FieldRun& run, const std::string& what) {
+  EXPECT_FALSE(run.report.global_fit().ambiguous())
+      << what << ": reported ambiguous (" << run.report.global_fit().orientation_decided_by()
+      << ", ratio " << run.report.global_fit().orientation_ambiguity() << ")";
+  return !run.report.global_fit().ambiguous();
 }
 
 TEST_P(ProductionPart, SpringbackOfEveryBend) {
   const PartExpectation& part = GetParam();
   const auto& cad = parts::testing::loaded_part(part.name);
   const FieldRun run = testing::run_field_case(cad, random_springback(cad, 11));
-  const BendCheck check = check_bends(run, 0.05, part.name);
+  ASSERT_TRUE(expect_found(run, part.name));
+  const BendCheck check = check_bends(run, unmeasurable_by_construction(run, cad), 0.05, part.name);
   std::printf("%s: %d bends measured, worst springback error %.4f deg\n", part.name.c_str(),
               check.measured, check.worst);
   // The flanges are produced rigid: each flange of a measured bend is flat within the noise
@@ -226,11 +248,12 @@ TEST_P(ProductionPart, BothSidesGiveTheSameAngles) {
   const FieldRun top_run = testing::run_field_case(cad, sc);
   sc.from_below = true;
   const FieldRun bottom_run = testing::run_field_case(cad, sc);
-  if (!fit_is_trusted(top_run, part.name + " top") ||
-      !fit_is_trusted(bottom_run, part.name + " bottom"))
-    return;
-  const BendCheck top = check_bends(top_run, 0.05, "top");
-  const BendCheck bottom = check_bends(bottom_run, 0.05, "bottom");
+  ASSERT_TRUE(expect_found(top_run, part.name + " top"));
+  ASSERT_TRUE(expect_found(bottom_run, part.name + " bottom"));
+  const BendCheck top =
+      check_bends(top_run, unmeasurable_by_construction(top_run, cad), 0.05, "top");
+  const BendCheck bottom =
+      check_bends(bottom_run, unmeasurable_by_construction(bottom_run, cad), 0.05, "bottom");
   double worst_pair = 0.0;
   for (const auto& [id, sb] : bottom.springback)
     if (top.springback.count(id))
@@ -245,7 +268,7 @@ TEST_P(ProductionPart, BothSidesGiveTheSameAngles) {
 }
 
 // The noisy case: sigma 0.05 mm, 2 % outliers, 10 % of the seen area missing. Every
-// measured bend within 0.2 deg of its truth and judged right; the part fails (its springback
+// measured bend within 0.15 deg of its truth and judged right; the part fails (its springback
 // reaches 3 deg).
 TEST_P(ProductionPart, NoisyScanWithinTwoTenths) {
   if (testing::kUnderSanitizer) GTEST_SKIP() << "accuracy test, run without sanitizers";
@@ -256,14 +279,15 @@ TEST_P(ProductionPart, NoisyScanWithinTwoTenths) {
   sc.outliers = 0.02;
   sc.missing = 0.10;
   const FieldRun run = testing::run_field_case(cad, sc);
-  if (!fit_is_trusted(run, part.name + " noisy")) return;
-  const BendCheck check = check_bends(run, 0.2, "noisy");
+  ASSERT_TRUE(expect_found(run, part.name + " noisy"));
+  // Measured 0.003-0.071 deg (side panel): 0.15 is about twice the worst.
+  const BendCheck check = check_bends(run, unmeasurable_by_construction(run, cad), 0.15, "noisy");
   std::printf("%s noisy: %d bends measured, worst springback error %.4f deg\n", part.name.c_str(),
               check.measured, check.worst);
   EXPECT_GE(check.measured, part.measurable_noisy);
   bool beyond = false;
   for (const parts::BendTruth& truth : run.bends)
-    beyond = beyond || (!truth.hem && std::abs(truth.springback_deg) > 1.0 + 0.2);
+    beyond = beyond || (!truth.hem && std::abs(truth.springback_deg) > 1.0 + 0.15);
   if (beyond) {
     EXPECT_FALSE(run.report.verdict().pass());
   }
@@ -288,10 +312,11 @@ TEST_P(ProductionPart, PointsOnlyScanFitsThePose) {
   // The side panel's half turn about its normal fits within 0.04 mm when the scan's normals
   // are estimated: then the part must be reported ambiguous (a verdict reason, a PLC result
   // code), never turned silently.
-  if (run.report.global_fit().ambiguous()) {
+  if (part.near_symmetric && run.report.global_fit().ambiguous()) {
     EXPECT_FALSE(run.report.verdict().pass());
     return;
   }
+  ASSERT_TRUE(expect_found(run, part.name + " points only"));
   EXPECT_LE(rotation_deg, part.points_only_rotation_deg);
   EXPECT_LE(run.report.global_fit().rms_residual(), part.points_only_residual_mm);
 }
@@ -308,8 +333,9 @@ TEST_P(ProductionPart, PointsOnlyScanMeasuresEveryBend) {
   sc.pose = Eigen::Translation3d(40.0, -25.0, 300.0) *
             Eigen::AngleAxisd(0.5, Vec3(0.2, 0.3, 1.0).normalized());
   const FieldRun run = testing::run_field_case(cad, sc);
-  if (!fit_is_trusted(run, part.name + " points only")) return;
-  const BendCheck check = check_bends(run, 0.05, part.name + " points only");
+  ASSERT_TRUE(expect_found(run, part.name + " points only"));
+  const BendCheck check =
+      check_bends(run, unmeasurable_by_construction(run, cad), 0.05, part.name + " points only");
   std::printf("%s points only: %d bends measured, worst springback error %.4f deg\n",
               part.name.c_str(), check.measured, check.worst);
   EXPECT_GE(check.measured, part.measurable_bends);

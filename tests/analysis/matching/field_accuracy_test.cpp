@@ -1,7 +1,8 @@
 // The deformation field and the compensation against the constructed truth: L, U, Z
-// and hat profiles and two openamr parts, produced with springback 0.2-3 deg, posed at random,
-// laser-scanned in two tilted passes, analysed by run_inspection. The truth of each control
-// point is the produced position of its CAD point in the result frame (field_truth.hpp).
+// and hat profiles and the four openamr parts, produced with springback 0.2-3 deg, posed at
+// random, laser-scanned in two tilted passes, analysed by run_inspection. The truth of each
+// control point is the produced position of its CAD point in the CAD frame, placed by the
+// construction alone (field_truth.hpp): an error of the report's result frame is measured.
 //
 // The contrast table of docs/matching.md comes from these cases:
 //   ./build/tests/analysis/springscan_analysis_tests --gtest_filter='FieldAccuracy.*Contrast*'
@@ -105,8 +106,14 @@ TEST_P(FieldAccuracy, SubSampleAgainstTheProducedTruth) {
   EXPECT_EQ(field.refinement(), "flange_motion_surface");
   EXPECT_EQ(field.matching_size(), std::min(field.model_points(), field.scan_points()));
   const auto e = field_errors(run, field.vectors());
+  std::printf("%s: p95 %.4f / %.4f mm, max %.4f mm, result frame off by up to %.4f mm\n",
+              c.name.c_str(), e.p95_normal, e.p95_full, e.max_full, run.frame_error_mm);
+  // docs/matching.md: 0.05 mm along the normal. The full vector also holds the frame's slide
+  // along edge-on walls (front panel 0.059, cover flange 0.066 mm at p95): 0.1, and so its max.
   EXPECT_LE(e.p95_normal, 0.05) << c.name;
   EXPECT_LE(e.p95_full, 0.1) << c.name;
+  EXPECT_LE(e.max_full, 0.1) << c.name;
+  EXPECT_LE(run.frame_error_mm, 0.1) << c.name;
   EXPECT_LE(compensation_p95(run, 1.0), 0.1) << c.name;
   EXPECT_LT(field.residual_rms_mm(), 0.04) << c.name;
   // Coverage of the scanned area: every control point with scan all round it has a vector.
@@ -142,7 +149,12 @@ TEST_P(FieldAccuracy, NoisyScanWithOutliersAndMissingAreas) {
   const FieldRun run = testing::run_field_case(cad_of(c), sc);
   const auto& field = run.report.deformation_field();
   ASSERT_GT(field.vectors_size(), 20) << c.name;
-  EXPECT_LE(field_errors(run, field.vectors()).p95_full, 0.15) << c.name;
+  const auto noisy = field_errors(run, field.vectors());
+  std::printf("%s noisy: p95 %.4f / %.4f mm, max %.4f mm, result frame off by up to %.4f mm\n",
+              c.name.c_str(), noisy.p95_normal, noisy.p95_full, noisy.max_full, run.frame_error_mm);
+  // Measured 0.026-0.116 mm at p95 and at most 0.122 mm (side panel): within 0.15 both.
+  EXPECT_LE(noisy.p95_full, 0.15) << c.name;
+  EXPECT_LE(noisy.max_full, 0.15) << c.name;
   // The missing areas are reported as not covered.
   std::vector<bool> has(run.control.size(), false);
   for (const auto& v : field.vectors()) has[static_cast<std::size_t>(v.model_index())] = true;
@@ -174,10 +186,19 @@ TEST_P(FieldAccuracy, ZeroSpringbackGivesZeroVectors) {
               run.report.global_fit().orientation_ambiguity());
   ASSERT_FALSE(run.report.global_fit().ambiguous()) << c.name;
   ASSERT_GT(run.report.deformation_field().vectors_size(), 20) << c.name;
-  // Every vector is the truth within 0.05 mm. The truth itself is the result frame's error
-  // only: the best fit leaves the translation along an extrusion's bend lines to the sheet's
-  // end edges, where it is off by up to a few tenths today (global fit, not this stage).
-  EXPECT_LE(field_errors(run, run.report.deformation_field().vectors()).max_full, 0.05) << c.name;
+  // Nothing sprang back: the truth is the CAD part itself in the CAD frame, every vector is
+  // zero, and whatever a vector holds is error (the result frame's among it). Within the noise
+  // bound of the sub-sample field, 0.05 mm, at p95 and at the worst vector.
+  const auto e = field_errors(run, run.report.deformation_field().vectors());
+  std::vector<double> length;
+  for (const auto& v : run.report.deformation_field().vectors())
+    length.push_back((testing::vec(v.scan()) - testing::vec(v.model())).norm());
+  std::printf("%s zero springback: vectors p95 %.4f max %.4f mm; result frame off by %.4f mm\n",
+              c.name.c_str(), testing::p95(length), e.max_length, run.frame_error_mm);
+  EXPECT_LE(testing::p95(length), 0.05) << c.name;
+  EXPECT_LE(e.max_length, 0.05) << c.name;
+  EXPECT_LE(e.max_full, 0.05) << c.name;
+  EXPECT_LE(run.frame_error_mm, 0.05) << c.name;
 }
 
 // As the station's laser driver delivers a scan: points only, the part facing the scanner (+z
@@ -186,6 +207,32 @@ TEST_P(FieldAccuracy, ZeroSpringbackGivesZeroVectors) {
 // them: the same bounds as with the scanner's normals. (Without them the motor bracket's 2 mm
 // rims took their offsets from the skins beside them: p95 0.26 mm along the normal.)
 class FieldAccuracyPointsOnly : public FieldAccuracy {};
+
+// The bounds of a points-only case against the truth in the CAD frame (mm): p95 along the
+// normal, p95 and max as a full vector; and the field's shape alone (p95 full vector in the
+// report's own frame). A scan with normals meets 0.05 / 0.1 / 0.1 on every part (above), and so
+// do the profiles and the motor bracket facing the scanner here. The other solids are looser,
+// each measured at about half its bound (this file's commit, docs/matching.md "Truth in the
+// CAD frame"): with points only a solid's frame rests on normals estimated from the points, and
+// the result frame is off against the best fit of the seen surface by 0.08 mm (motor bracket
+// about the diagonal), 0.26 / 0.44 mm (front panel: its translation along y is pinned by the
+// edge strips, docs/matching.md step 2), 0.09 / 0.22 mm (cover flange, its hems) and 0.05 mm
+// (side panel, whose field's shape is 0.15 mm off along the surface there): issue 32's "poses
+// under noise". A frame error is in every vector, so it is bounded here, never cancelled.
+struct PointsOnlyBound {
+  double p95_normal = 0.05, p95_full = 0.1, max_full = 0.1, shape_p95_full = 0.1;
+};
+
+PointsOnlyBound points_only_bound(const std::string& name, bool diagonal) {
+  const auto is = [&](const char* part) { return name.find(part) != std::string::npos; };
+  if (is("Motor_bracket") && diagonal) return {0.08, 0.12, 0.12, 0.1};
+  if (is("Front_panel"))
+    return diagonal ? PointsOnlyBound{0.1, 0.7, 0.8, 0.1} : PointsOnlyBound{0.2, 0.4, 0.4, 0.1};
+  if (is("Cover_flange"))
+    return diagonal ? PointsOnlyBound{0.15, 0.3, 0.3, 0.1} : PointsOnlyBound{0.05, 0.1, 0.2, 0.1};
+  if (is("Side_panel") && diagonal) return {0.06, 0.3, 0.3, 0.25};
+  return {};
+}
 
 // One points-only case: the pose facing the scanner; `tilt_axis_deg` the passes' tilt axis
 // (FieldScenario; negative: its default).
@@ -201,10 +248,17 @@ void check_points_only(const PartCase& c, double tilt_axis_deg) {
   ASSERT_GT(field.vectors_size(), 20) << c.name;
   ASSERT_FALSE(run.report.global_fit().ambiguous()) << c.name;
   const auto e = field_errors(run, field.vectors());
-  std::printf("%s points only (tilt axis %.0f deg): p95 %.4f / %.4f mm over %zu vectors\n",
-              c.name.c_str(), sc.tilt_axis_deg, e.p95_normal, e.p95_full, e.vectors);
-  EXPECT_LE(e.p95_normal, 0.05) << c.name;
-  EXPECT_LE(e.p95_full, 0.1) << c.name;
+  const auto shape = field_errors(run, field.vectors(), true);
+  std::printf(
+      "%s points only (tilt axis %.0f deg): p95 %.4f / %.4f mm, max %.4f mm over %zu vectors; "
+      "result frame off by up to %.4f mm; in the report's frame p95 %.4f / %.4f mm\n",
+      c.name.c_str(), sc.tilt_axis_deg, e.p95_normal, e.p95_full, e.max_full, e.vectors,
+      run.frame_error_mm, shape.p95_normal, shape.p95_full);
+  const PointsOnlyBound bound = points_only_bound(c.name, tilt_axis_deg == 45.0);
+  EXPECT_LE(e.p95_normal, bound.p95_normal) << c.name;
+  EXPECT_LE(e.p95_full, bound.p95_full) << c.name;
+  EXPECT_LE(e.max_full, bound.max_full) << c.name;
+  EXPECT_LE(shape.p95_full, bound.shape_p95_full) << c.name;
   EXPECT_LT(field.residual_rms_mm(), 0.04) << c.name;
 }
 

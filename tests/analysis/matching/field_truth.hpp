@@ -1,17 +1,21 @@
 #pragma once
 // Ground truth for the deformation field: a CAD part produced with known springback
 // (simulators/parts), laser-scanned from a pose, analysed end to end; the truth of every model
-// control point is the produced position of its CAD point, carried into the result frame by
-// the report's own best fit (T_cad_scan * T_scan_part). Nothing here reads what the analysis
-// computed except the report fields under test and the result frame.
+// control point is the produced position of its CAD point in the CAD frame, placed by the
+// constructed pose and deformation alone (true_result_frame below). Nothing here reads what the
+// analysis computed except the report fields under test: an error of the report's result frame
+// is part of every field error measured against this truth, not cancelled by it.
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
+#include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "analysis/cad/distance.hpp"
@@ -98,7 +102,13 @@ struct FieldRun {
   std::vector<Vec3> control;            ///< control points (CAD), by model index
   std::vector<parts::BendTruth> bends;  ///< the produced part's bends (springback applied)
   Transform T_result_part = Transform::Identity();  ///< the report's frame from the part's
+  /// The true result frame from the part's (true_result_frame): the truth is placed with it.
+  Transform T_truth_part = Transform::Identity();
+  /// The largest distance, over the control points, between where the report's frame and the
+  /// true one put the produced part: the result frame's own error, mm.
+  double frame_error_mm = 0.0;
   std::vector<Vec3> scan_cad_points;  ///< per scan point: the CAD point it is the image of
+  std::vector<int> scan_faces;        ///< per scan point: its CAD face, -1 for an outlier
   std::vector<double> deviation;      ///< per scan point: its signed deviation in the report
 };
 
@@ -106,6 +116,66 @@ inline Transform from_row_major(const google::protobuf::RepeatedField<double>& m
   Transform T = Transform::Identity();
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c) T.matrix()(r, c) = m.Get(4 * r + c);
+  return T;
+}
+
+/// The result frame the station should report, from the construction alone: identity when
+/// nothing sprang back (the produced part is the CAD part, placed by the pose the test chose);
+/// otherwise the best fit of the produced surface that the scan sees (`produced`, noise-free, in
+/// the part frame) onto the CAD planes of the same material points (`cad`, `cad_normals`), by
+/// the objective docs/alignment.md states for the station's frame: point-to-plane, the farthest
+/// `trimmed_fraction` of the pairs left out, a Huber weight with corner `huber_mm`. Solved here
+/// by Gauss-Newton with Eigen alone, no code of analysis/. A direction the planes leave free
+/// (along an extrusion) keeps the part's own value, as the root flange of the produced part
+/// keeps its CAD place: the minimum-norm step about the centroid.
+inline Transform true_result_frame(const std::vector<Vec3>& produced, const std::vector<Vec3>& cad,
+                                   const std::vector<Vec3>& cad_normals,
+                                   double trimmed_fraction = 0.0, double huber_mm = 1.0) {
+  Transform T = Transform::Identity();
+  if (produced.size() < 6) return T;
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : produced) c += p;
+  c /= static_cast<double>(produced.size());
+  double scale = 0.0;  // rotation unknowns times the part's size: comparable with the shifts
+  for (const Vec3& p : produced) scale = std::max(scale, (p - c).norm());
+  scale = std::max(scale, 1.0);
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    std::vector<double> r(produced.size());
+    for (std::size_t i = 0; i < produced.size(); ++i)
+      r[i] = cad_normals[i].dot(T * produced[i] - cad[i]);
+    std::vector<double> magnitude(r.size());
+    for (std::size_t i = 0; i < r.size(); ++i) magnitude[i] = std::abs(r[i]);
+    const auto keep = static_cast<std::size_t>(
+        std::ceil((1.0 - trimmed_fraction) * static_cast<double>(r.size())));
+    std::nth_element(magnitude.begin(), magnitude.begin() + static_cast<long>(keep - 1),
+                     magnitude.end());
+    const double cut = magnitude[keep - 1];
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    for (std::size_t i = 0; i < produced.size(); ++i) {
+      if (std::abs(r[i]) > cut) continue;
+      const Vec3 p = T * produced[i];
+      const Vec3& n = cad_normals[i];
+      Eigen::Matrix<double, 6, 1> J;
+      J << (p - c).cross(n) / scale, n;
+      const double w = std::abs(r[i]) <= huber_mm ? 1.0 : huber_mm / std::abs(r[i]);
+      A += w * J * J.transpose();
+      b -= w * J * r[i];
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(A);
+    Eigen::Matrix<double, 6, 1> x = Eigen::Matrix<double, 6, 1>::Zero();
+    const double largest = eig.eigenvalues().maxCoeff();
+    for (int k = 0; k < 6; ++k)
+      if (eig.eigenvalues()(k) > 1e-9 * largest)
+        x += eig.eigenvectors().col(k) * (eig.eigenvectors().col(k).dot(b) / eig.eigenvalues()(k));
+    const Vec3 w = x.head<3>() / scale;
+    const Transform step =
+        Eigen::Translation3d(c + x.tail<3>()) *
+        Eigen::AngleAxisd(w.norm(), w.norm() > 0 ? w.normalized() : Vec3::UnitZ()) *
+        Eigen::Translation3d(-c);
+    T = step * T;
+    if (w.norm() * scale < 1e-9 && x.tail<3>().norm() < 1e-9) break;
+  }
   return T;
 }
 
@@ -155,6 +225,28 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
     cad_normal[j] =
         part->local_transform(scan.cad_points[j], scan.cloud.face_ids[j]).linear().transpose() *
         (sc.pose.linear().transpose() * scan.cloud.normals[j]);
+  // The true result frame, from the seen material (every 4th point is plenty for 6 unknowns).
+  bool sprang = false;
+  for (const parts::BendTruth& b : part->bends) sprang = sprang || b.springback_deg != 0.0;
+  if (sprang) {
+    // Evenly over the seen area (the best fit's measure is the surface, not the scan's density,
+    // which two passes double where they overlap): one point per 1 mm cell of the CAD frame.
+    std::vector<Vec3> produced, cad_at, normal_at;
+    std::set<std::tuple<long, long, long>> cells;
+    for (std::size_t j = 0; j < scan.cad_points.size(); ++j) {
+      if (scan.outlier[j]) continue;
+      const Vec3& m = scan.cad_points[j];
+      if (!cells.emplace(std::lround(m.x()), std::lround(m.y()), std::lround(m.z())).second)
+        continue;
+      produced.push_back(part->produced(scan.cad_points[j], scan.cloud.face_ids[j]));
+      cad_at.push_back(scan.cad_points[j]);
+      normal_at.push_back(cad_normal[j]);
+    }
+    run.T_truth_part = true_result_frame(produced, cad_at, normal_at);
+  }
+  run.scan_faces = scan.cloud.face_ids;
+  for (std::size_t j = 0; j < run.scan_faces.size(); ++j)
+    if (scan.outlier[j]) run.scan_faces[j] = -1;
   scan.cloud.face_ids.clear();
   if (!sc.scanner_normals) scan.cloud.normals.clear();
   auto outcome = run_inspection(exact_model(cad), scan.cloud, settings);
@@ -191,9 +283,11 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
     const std::size_t k = samples.nearest(m)->index;
     const int face = cad.model.samples.face_ids[k];
     const Transform local = part->local_transform(m, face);
-    run.truth.push_back(T_result_part * (local * m));
-    run.truth_normal.push_back(T_result_part.linear() * local.linear() *
+    run.truth.push_back(run.T_truth_part * (local * m));
+    run.truth_normal.push_back(run.T_truth_part.linear() * local.linear() *
                                cad.model.samples.normals[k]);
+    run.frame_error_mm =
+        std::max(run.frame_error_mm, ((T_result_part * (local * m)) - run.truth.back()).norm());
     seen_tree.radius(m, 1.5, near);
     const Vec3& n = cad.model.samples.normals[k];
     // A shell has one surface, seen from either side; a solid's skins face away from each other.
@@ -210,15 +304,21 @@ inline FieldRun run_field_case(const parts::CadPart& cad, const FieldScenario& s
 
 inline Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
-/// Errors of `vectors` (model_index, scan) against the truth.
+/// Errors of `vectors` (model_index, scan) against the truth; `in_report_frame`: against the
+/// truth carried into the report's own result frame, so that the frame's error cancels and only
+/// the field's shape is measured (never alone: beside the errors in the true frame).
 inline FieldErrors field_errors(const FieldRun& run,
-                                const google::protobuf::RepeatedPtrField<v1::Correspondence>& vs) {
+                                const google::protobuf::RepeatedPtrField<v1::Correspondence>& vs,
+                                bool in_report_frame = false) {
   FieldErrors e;
   std::vector<double> normal, full;
+  const Transform to_report = in_report_frame
+                                  ? Transform(run.T_result_part * run.T_truth_part.inverse())
+                                  : Transform::Identity();
   for (const auto& v : vs) {
     const std::size_t i = static_cast<std::size_t>(v.model_index());
-    const Vec3 err = vec(v.scan()) - run.truth[i];
-    normal.push_back(std::abs(err.dot(run.truth_normal[i])));
+    const Vec3 err = vec(v.scan()) - to_report * run.truth[i];
+    normal.push_back(std::abs(err.dot(to_report.linear() * run.truth_normal[i])));
     full.push_back(err.norm());
     e.max_full = std::max(e.max_full, err.norm());
     e.max_length = std::max(e.max_length, (vec(v.scan()) - vec(v.model())).norm());
