@@ -55,7 +55,7 @@ TEST_F(HilTest, UnplugMidScanIsAFaultAndAfterResetTheNextCyclePasses) {
   EXPECT_EQ(next->result.seq, 2);
   EXPECT_EQ(next->result.job_id, 3);
   EXPECT_EQ(next->result.code, regs::ResultCode::kOk);
-  expect_springback(report(2), testing::kGoodSpringback, 0.1);
+  expect_springback(report(2), testing::kGoodSpringback, 0.05);
   EXPECT_EQ(daemon->stop(SIGTERM), 0);
 }
 

@@ -71,7 +71,7 @@ TEST_F(HilTest, GoodPartPassesWithItsSpringbackAndMbpollRunsTheHandshake) {
   EXPECT_LT(first.deviation().rms(), 0.2);
   EXPECT_FALSE(cycle->result.vectors_um.empty());
   EXPECT_TRUE(first.verdict().pass());
-  expect_springback(first, testing::kGoodSpringback, 0.1);
+  expect_springback(first, testing::kGoodSpringback, 0.05);
   expect_registers_match(cycle->result, first);
   // The tool designer's files in the record: a row per control point, the supported ones
   // being the report's compensation vectors (docs/report-format.md).
@@ -116,7 +116,7 @@ TEST_F(HilTest, GoodPartPassesWithItsSpringbackAndMbpollRunsTheHandshake) {
     EXPECT_NEAR(regs::decode_int32(pair, regs::WordOrder::kAbcd),
                 second.bends(j).springback_deg() * 1000.0, 1.0);
   }
-  expect_springback(second, testing::kGoodSpringback, 0.1);
+  expect_springback(second, testing::kGoodSpringback, 0.05);
   mbpoll_write(port, 0, regs::kCoilResultAck, "1");
   ASSERT_TRUE(mbpoll_wait_bit(port, regs::kDiResultValid, false, heartbeat));
   mbpoll_write(port, 0, regs::kCoilResultAck, "0");
@@ -135,7 +135,7 @@ TEST_F(HilTest, SpringbackBeyondToleranceFailsWithTheReasonInTheReport) {
   EXPECT_FALSE(cycle->part_ok);
   const v1::InspectionReport r = report(1);
   EXPECT_FALSE(r.verdict().pass());
-  const std::vector<int> index = expect_springback(r, produced, 0.1);
+  const std::vector<int> index = expect_springback(r, produced, 0.05);
   ASSERT_EQ(index.size(), 4u);
   expect_registers_match(cycle->result, r);
   std::string failed_bend;
