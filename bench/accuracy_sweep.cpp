@@ -1,0 +1,200 @@
+// Accuracy on fresh draws: every number of a case comes from the seed, so a run at a seed
+// nobody tuned to measures what the station does on parts it never saw (issue 39).
+//
+//   ./build/bench/accuracy_sweep --seed S [--cases N] [--points P]
+//
+// Each case draws a part (a random profile, L to five flanges, surface or 2 mm solid; or one of
+// the production solids of ../shared/data/cad), a springback per bend (0-3 deg, some exactly 0),
+// a pose, a view (passes tilted about the part's length or a diagonal, from above or below, with
+// or without the scanner's normals) and noise (sigma 0.02 or 0.05 mm, and then 2 % outliers and
+// 10 % missing), produces, scans and analyses it (run_inspection, as the station), and prints:
+// per bend the truth, the measured springback and the error, or why it has none; per case the
+// result frame's error against the truth placed by the construction alone (field_truth.hpp) and
+// the deformation field's p95 and max error; and a summary line. It fails (exit 1) only on a
+// crash or a bend off by more than 1 deg: CI runs it at a seed derived from the commit to report,
+// without blocking, while accuracy is being fixed (docs/springback.md keeps each landing's
+// summary).
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "tests/analysis/matching/field_truth.hpp"
+#include "tests/analysis/synthetic.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+struct SweepOptions {
+  std::uint64_t seed = 1;
+  int cases = 12;
+  std::int64_t points = 200'000;
+};
+
+struct Summary {
+  int cases = 0, ambiguous = 0, bends = 0, measured = 0, off_by_1deg = 0, crashes = 0;
+  std::vector<double> bend_errors;
+  double worst_frame_mm = 0.0, worst_field_p95_mm = 0.0;
+};
+
+const std::vector<std::string>& production_parts() {
+  static const std::vector<std::string> names = {
+      "openamr-MMP.03.00.00.003_Motor_bracket.step", "openamr-MMP.01.00.00.002_Cover_flange.step",
+      "openamr-MMP.00.00.00.003_Side_panel.step", "openamr-MMP.00.00.00.001_Front_panel.step",
+      "nema-17-bracket.step"};
+  return names;
+}
+
+// A random open profile: 2-5 flanges of 20-80 mm, turns of 60-100 deg either way, radii 1.5-5
+// mm, 40-120 mm wide; a surface or a 2 mm solid.
+parts::ProfileSpec random_profile(std::mt19937_64& rng) {
+  std::uniform_int_distribution<int> flanges(2, 5);
+  std::uniform_real_distribution<double> length(20.0, 80.0), turn(60.0, 100.0), radius(1.5, 5.0),
+      width(40.0, 120.0), unit(0.0, 1.0);
+  parts::ProfileSpec spec;
+  const int n = flanges(rng);
+  for (int k = 0; k < n; ++k) spec.flange_lengths_mm.push_back(length(rng));
+  for (int k = 0; k + 1 < n; ++k) {
+    spec.bend_angles_deg.push_back((unit(rng) < 0.5 ? -1.0 : 1.0) * turn(rng));
+    spec.bend_radii_mm.push_back(radius(rng));
+  }
+  spec.width_mm = width(rng);
+  spec.thickness_mm = unit(rng) < 0.5 ? 0.0 : 2.0;
+  return spec;
+}
+
+std::string describe(const parts::ProfileSpec& spec) {
+  std::string out = spec.thickness_mm > 0 ? "solid profile" : "profile";
+  char buf[64];
+  for (std::size_t k = 0; k < spec.flange_lengths_mm.size(); ++k) {
+    std::snprintf(buf, sizeof buf, k ? " %+.0f/%.0f" : " %.0f",
+                  k ? spec.bend_angles_deg[k - 1] : 0.0, spec.flange_lengths_mm[k]);
+    out += buf;
+  }
+  return out;
+}
+
+// One case: draw, produce, scan, analyse, print; adds to `sum`.
+void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summary& sum) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0), springback(0.0, 3.0);
+  const bool production = index % 2 == 1;
+  std::string name;
+  parts::ProfileSpec spec;
+  if (production) {
+    name = production_parts()[rng() % production_parts().size()];
+  } else {
+    spec = random_profile(rng);
+    name = "sweep_" + std::to_string(options.seed) + "_" + std::to_string(index);
+  }
+  const parts::CadPart& cad = testing::field_part(name, production ? nullptr : &spec);
+  testing::FieldScenario sc;
+  for (std::size_t b = 0; b < cad.model.segmentation.bends.size(); ++b)
+    sc.springback_deg.push_back(unit(rng) < 0.15 ? 0.0 : springback(rng));
+  if (sc.springback_deg.empty()) sc.springback_deg.push_back(0.0);
+  std::mt19937 pose_rng(static_cast<std::uint32_t>(rng()));
+  sc.pose = testing::random_motion(pose_rng, 500.0);
+  sc.tilt_axis_deg = production || unit(rng) < 0.5 ? 45.0 : 0.0;
+  sc.from_below = unit(rng) < 0.2;
+  sc.scanner_normals = unit(rng) < 0.7;
+  const bool noisy = unit(rng) < 0.4;
+  sc.noise_mm = noisy ? 0.05 : 0.02;
+  sc.outliers = noisy ? 0.02 : 0.0;
+  sc.missing = noisy ? 0.10 : 0.0;
+  sc.points = options.points;
+  sc.seed = rng() % 100000;
+  const testing::FieldRun run = testing::run_field_case(cad, sc);
+  const auto& report = run.report;
+  const bool ambiguous = report.global_fit().ambiguous();
+  const auto field = testing::field_errors(run, report.deformation_field().vectors());
+  std::printf(
+      "case %d: %s | sigma %.2f%s, passes about %.0f deg%s, %s | frame %.4f mm | field p95 %.4f "
+      "max %.4f mm (%zu vectors)%s\n",
+      index, production ? name.c_str() : describe(spec).c_str(), sc.noise_mm,
+      noisy ? " +2% outliers -10%" : "", sc.tilt_axis_deg, sc.from_below ? " from below" : "",
+      sc.scanner_normals ? "normals" : "points only", run.frame_error_mm, field.p95_full,
+      field.max_full, field.vectors, ambiguous ? " | AMBIGUOUS" : "");
+  ++sum.cases;
+  sum.ambiguous += ambiguous ? 1 : 0;
+  sum.worst_frame_mm = std::max(sum.worst_frame_mm, run.frame_error_mm);
+  sum.worst_field_p95_mm = std::max(sum.worst_field_p95_mm, field.p95_full);
+  for (const parts::BendTruth& truth : run.bends) {
+    const auto it = std::find_if(report.bends().begin(), report.bends().end(),
+                                 [&](const v1::Bend& b) { return b.id() == truth.bend_id; });
+    if (truth.hem) continue;
+    ++sum.bends;
+    if (it == report.bends().end() || !it->measured()) {
+      std::printf("  bend %d (%.1f deg): truth %.3f, not measured: %s\n", truth.bend_id,
+                  truth.nominal_angle_deg, truth.springback_deg,
+                  it == report.bends().end() ? "not in the report" : it->status().c_str());
+      continue;
+    }
+    const double error = it->springback_deg() - truth.springback_deg;
+    ++sum.measured;
+    sum.off_by_1deg += std::abs(error) > 1.0 ? 1 : 0;
+    sum.bend_errors.push_back(std::abs(error));
+    std::printf("  bend %d (%.1f deg): truth %.3f, measured %.3f, error %+.4f deg\n", truth.bend_id,
+                truth.nominal_angle_deg, truth.springback_deg, it->springback_deg(), error);
+  }
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+int run(const SweepOptions& options) {
+  std::printf("accuracy_sweep --seed %llu --cases %d --points %lld\n",
+              static_cast<unsigned long long>(options.seed), options.cases,
+              static_cast<long long>(options.points));
+  std::mt19937_64 rng(options.seed);
+  Summary sum;
+  for (int k = 0; k < options.cases; ++k) {
+    try {
+      run_case(k, rng, options, sum);
+    } catch (const std::exception& e) {
+      ++sum.crashes;
+      std::printf("case %d: CRASH: %s\n", k, e.what());
+    }
+  }
+  const double worst = sum.bend_errors.empty()
+                           ? 0.0
+                           : *std::max_element(sum.bend_errors.begin(), sum.bend_errors.end());
+  std::printf(
+      "summary: seed %llu, %d cases (%d ambiguous, %d crashed), %d of %d bends measured, "
+      "springback error median %.4f / worst %.4f deg, %d off by > 1 deg; result frame worst %.4f "
+      "mm; field p95 worst %.4f mm\n",
+      static_cast<unsigned long long>(options.seed), sum.cases, sum.ambiguous, sum.crashes,
+      sum.measured, sum.bends, median(sum.bend_errors), worst, sum.off_by_1deg, sum.worst_frame_mm,
+      sum.worst_field_p95_mm);
+  return sum.crashes == 0 && sum.off_by_1deg == 0 ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace springscan::analysis
+
+int main(int argc, char** argv) {
+  springscan::analysis::SweepOptions options;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (arg == "--seed" && has_value) {
+      options.seed = std::strtoull(argv[++i], nullptr, 0);
+    } else if (arg == "--cases" && has_value) {
+      options.cases = std::atoi(argv[++i]);
+    } else if (arg == "--points" && has_value) {
+      options.points = std::atoll(argv[++i]);
+    } else {
+      std::fprintf(stderr, "usage: accuracy_sweep [--seed S] [--cases N] [--points P]\n");
+      return 2;
+    }
+  }
+  if (options.cases < 1 || options.points < 1000) {
+    std::fprintf(stderr, "accuracy_sweep: --cases >= 1 and --points >= 1000\n");
+    return 2;
+  }
+  return springscan::analysis::run(options);
+}
