@@ -17,6 +17,7 @@
 #include "analysis/cad/segmentation.hpp"
 #include "simulators/parts/produced_part.hpp"
 #include "tests/analysis/cad_test_util.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 #include "tests/simulators/parts/production_parts.hpp"
 
 namespace springscan::analysis {
@@ -81,7 +82,13 @@ TEST(BendTable, SourcesListsTheFourProductionParts) {
   EXPECT_EQ(bends["openamr-MMP.00.00.00.001_Front_panel.step"], 4u);
 }
 
-class BendTablePart : public ::testing::TestWithParam<int> {};
+class BendTablePart : public ::testing::TestWithParam<int> {
+ protected:
+  // Under the sanitizers (5-15x slower) the motor bracket alone: they look for memory errors.
+  void SetUp() override {
+    if (testing::kUnderSanitizer && GetParam() != 0) GTEST_SKIP() << "release suite only";
+  }
+};
 
 // Every bend of the table is found once, with its angle and inner radius, and nothing else is.
 TEST_P(BendTablePart, SegmentationMatchesTheTable) {
