@@ -124,9 +124,10 @@ TEST(OrientationSettle, SymmetryFeaturesOrDecisivePointsFindTheOrientation) {
         without.fit.ambiguous() ? ", ambiguous" : "");
     EXPECT_LT(with.rotation_error_deg, 0.5) << "trial " << trial;
     EXPECT_FALSE(with.fit.ambiguous()) << "trial " << trial;
-    if (!without.fit.ambiguous()) {
-      EXPECT_LT(without.rotation_error_deg, 0.5) << "trial " << trial;
-    }
+    // The hat is uneven by construction (0.6 mm of brim): the scan shows it, and the fit must
+    // find it without features too, never report it ambiguous.
+    EXPECT_FALSE(without.fit.ambiguous()) << "trial " << trial;
+    EXPECT_LT(without.rotation_error_deg, 0.5) << "trial " << trial;
     if (with.fit.orientation_decided_by() != "symmetry features") continue;
     ++by_features;
     EXPECT_EQ(without.fit.orientation_decided_by(), "decisive points") << "trial " << trial;
@@ -149,7 +150,7 @@ TEST(OrientationSettle, FeaturesThatShowNoDifferenceDoNotDecide) {
   f->set_radius_mm(10.0);
   std::mt19937 rng(3);  // the first pose of the sweep above: its rivals are settled
   const Outcome o = inspect(testing::random_motion(rng, 300.0), s, 100);
-  if (o.fit.orientation_decided_by() == "surface") GTEST_SKIP() << "no rival to settle here";
+  ASSERT_NE(o.fit.orientation_decided_by(), "surface") << "the case lost its rivals";
   EXPECT_EQ(o.fit.orientation_decided_by(), "decisive points");
   EXPECT_LT(o.rotation_error_deg, 0.05);
   bool warned = false;
