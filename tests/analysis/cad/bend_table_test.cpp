@@ -113,8 +113,8 @@ TEST_P(BendTablePart, SegmentationMatchesTheTable) {
   for (const Bend& b : bends)
     for (int id : {b.flange_a, b.flange_b}) {
       const auto& flanges = part.model.segmentation.flanges;
-      const auto it = std::find_if(flanges.begin(), flanges.end(),
-                                   [&](const Flange& f) { return f.id == id; });
+      const auto it =
+          std::find_if(flanges.begin(), flanges.end(), [&](const Flange& f) { return f.id == id; });
       ASSERT_NE(it, flanges.end()) << row.file << " bend " << b.id;
       EXPECT_NEAR(it->thickness_mm, row.thickness_mm, 0.01) << row.file << " flange " << id;
     }
