@@ -72,6 +72,7 @@ PointCloud scan_in_cad(const Case& c, const PartModel& model, ScanSimulationSett
 void expect_springback(char kind, int trials, const ScanSimulationSettings& st, double tol_deg,
                        std::uint32_t seed) {
   std::mt19937 rng(seed);
+  double worst = 0.0;
   for (int t = 0; t < trials; ++t) {
     const Case c = random_case(kind, rng);
     const auto model = profile_part_model(c.spec, {.sample_count = 20000});
@@ -83,11 +84,13 @@ void expect_springback(char kind, int trials, const ScanSimulationSettings& st, 
     for (std::size_t b = 0; b < result->bends.size(); ++b) {
       const BendMeasurement& m = result->bends[b];
       ASSERT_TRUE(m.measured) << m.status;
+      worst = std::max(worst, std::abs(m.springback_deg - c.springback_deg[b]));
       EXPECT_NEAR(m.springback_deg, c.springback_deg[b], tol_deg)
           << kind << " trial " << t << " bend " << b << " nominal " << m.nominal_angle_deg;
       EXPECT_NEAR(m.measured_angle_deg, m.nominal_angle_deg - c.springback_deg[b], tol_deg);
     }
   }
+  std::printf("%c: worst springback error %.4f deg (bound %.2f)\n", kind, worst, tol_deg);
 }
 
 class SpringbackAccuracy : public ::testing::TestWithParam<char> {};
@@ -99,14 +102,15 @@ TEST_P(SpringbackAccuracy, CleanScanWithin005Deg) {
   expect_springback(GetParam(), 2, st, 0.05, 100 + GetParam());
 }
 
-TEST_P(SpringbackAccuracy, OutliersHolesAndNoiseWithin02Deg) {
+// Measured at most 0.030 deg (the hat; L 0.002, U 0.007, Z 0.004): about twice that.
+TEST_P(SpringbackAccuracy, OutliersHolesAndNoiseWithin006Deg) {
   ScanSimulationSettings st;
   st.point_count = 50000;
   st.noise_sigma_mm = 0.05;
   st.outlier_fraction = 0.02;
   st.missing_fraction = 0.10;
   st.missing_patches = 2;
-  expect_springback(GetParam(), 2, st, 0.2, 200 + GetParam());
+  expect_springback(GetParam(), 2, st, 0.06, 200 + GetParam());
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, SpringbackAccuracy, ::testing::Values('L', 'U', 'H', 'Z'));
