@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "analysis/core/kdtree.hpp"
+#include "analysis/core/spacing.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -18,18 +19,7 @@ constexpr double kSamePointMm = 1e-9;
 // spacing of the reduced model (about the k-center radius w).
 double median_spacing(const std::vector<Vec3>& points) {
   if (points.size() < 2) return 0.0;
-  const KdTree tree(points);
-  std::vector<double> nearest;
-  nearest.reserve(points.size());
-  std::vector<Neighbor> two;
-  for (const auto& p : points) {
-    tree.knn(p, 2, two);
-    if (two.size() == 2) nearest.push_back(std::sqrt(two[1].squared_distance));
-  }
-  if (nearest.empty()) return 0.0;
-  std::nth_element(nearest.begin(), nearest.begin() + static_cast<long>(nearest.size() / 2),
-                   nearest.end());
-  return nearest[nearest.size() / 2];
+  return median_neighbour_spacing(KdTree(points), points);
 }
 
 std::string validate(const std::vector<Vec3>& control, const CompensationSettings& s) {

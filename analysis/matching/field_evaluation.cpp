@@ -5,24 +5,10 @@
 #include <cmath>
 
 #include "analysis/core/kdtree.hpp"
+#include "analysis/core/spacing.hpp"
 
 namespace springscan::analysis {
 namespace {
-
-// The median distance from each field point to its nearest other one: the reduced model's
-// sampling spacing (about the k-center radius w), as compensation.cpp takes it.
-double median_spacing(const KdTree& tree, const std::vector<Vec3>& points) {
-  std::vector<double> nearest;
-  std::vector<Neighbor> two;
-  for (const Vec3& p : points) {
-    tree.knn(p, 2, two);
-    if (two.size() == 2) nearest.push_back(std::sqrt(two[1].squared_distance));
-  }
-  if (nearest.empty()) return 0.0;
-  std::nth_element(nearest.begin(), nearest.begin() + static_cast<long>(nearest.size() / 2),
-                   nearest.end());
-  return nearest[nearest.size() / 2];
-}
 
 // Relative weight of the ridge on the gradient: small enough to leave a gradient the neighbours
 // span (a turning flange), large enough to keep the 4x4 system regular on a flat patch.
@@ -43,7 +29,7 @@ FieldAtPoints evaluate_field(const DeformationField& field, const std::vector<Ve
   const KdTree tree(anchors);
   const double sigma = settings.smoothing_radius_mm > 0.0
                            ? settings.smoothing_radius_mm
-                           : settings.spacing_factor * median_spacing(tree, anchors);
+                           : settings.spacing_factor * median_neighbour_spacing(tree, anchors);
   out.smoothing_radius_mm = sigma;
   std::vector<Neighbor> near;
   for (std::size_t k = 0; k < points.size(); ++k) {

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "analysis/core/kdtree.hpp"
+#include "analysis/core/spacing.hpp"
 #include "analysis/matching/part_motion.hpp"
 
 namespace springscan::analysis {
@@ -59,15 +60,7 @@ Transform smoothed_seed(const DeformationField& raw, const KdTree& anchors, doub
 
 double median_spacing(const std::vector<Vec3>& points) {
   if (points.size() < 2) return 1.0;
-  const KdTree tree(points);
-  std::vector<double> d;
-  std::vector<Neighbor> two;
-  for (const Vec3& p : points) {
-    tree.knn(p, 2, two);
-    if (two.size() == 2) d.push_back(std::sqrt(two[1].squared_distance));
-  }
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return std::max(d[d.size() / 2], 1e-6);
+  return std::max(median_neighbour_spacing(KdTree(points), points), 1e-6);
 }
 
 // One end of a point set along d: the points are uniform in d near a straight edge, so the edge

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/spacing.hpp"
 #include "analysis/registration/facing.hpp"
 
 namespace springscan::analysis {
@@ -30,16 +31,7 @@ double rotation_apart_deg(const Transform& a, const Transform& b) {
 
 double model_sample_spacing(const KdTree& model_tree) {
   if (model_tree.size() < 2) return 0.0;
-  const std::vector<Vec3> probe = strided_sample(model_tree.points(), kSpacingSamples);
-  std::vector<double> d(probe.size());
-  std::vector<Neighbor> out;
-  for (std::size_t i = 0; i < probe.size(); ++i) {
-    model_tree.knn(probe[i], 2, out);
-    d[i] = out.size() > 1 ? std::sqrt(out[1].squared_distance) : 0.0;
-  }
-  const auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-  std::nth_element(d.begin(), mid, d.end());
-  return *mid;
+  return median_neighbour_spacing(model_tree, strided_sample(model_tree.points(), kSpacingSamples));
 }
 
 namespace {
