@@ -297,6 +297,16 @@ const std::vector<Vec3>& normals_of(const PointCloud& scan) {
   return scan.normals.size() == scan.size() ? scan.normals : kNoNormals;
 }
 
+// Keeps `p` with its estimated normal `n` when `n` faces the scanner's `viewpoint` within 60 deg
+// (the rule of exact_update_points and facing_fit_points below, said there).
+void keep_if_facing_viewpoint(const Vec3& p, const Vec3& n, const Vec3& viewpoint,
+                              FacingSample& out) {
+  constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
+  if (n.dot((viewpoint - p).normalized()) < kMinFacingViewpoint) return;
+  out.points.push_back(p);
+  out.normals.push_back(n);
+}
+
 // The scan points the exact-surface updates pair (global_fit.hpp, finish_best_fit): an
 // evenly strided sample of `count`, with the scan's normals when it has them. A points-only
 // scan of a solid lends a point the normal of its nearest fit point (estimated there and turned
@@ -312,17 +322,11 @@ FacingSample exact_update_points(const PointCloud& scan, const PointCloud& fit_p
                                  std::size_t count) {
   if (!normals_of(scan).empty() || fit_normals.empty())
     return facing_sample(scan.points, normals_of(scan), count);
-  constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
   const KdTree fit_tree(fit_points.points);
   FacingSample out;
-  for (const Vec3& p : strided_sample(scan.points, count)) {
-    const auto nn = fit_tree.nearest(p);
-    if (!nn) continue;
-    const Vec3& n = fit_normals[nn->index];
-    if (n.dot((viewpoint - p).normalized()) < kMinFacingViewpoint) continue;
-    out.points.push_back(p);
-    out.normals.push_back(n);
-  }
+  for (const Vec3& p : strided_sample(scan.points, count))
+    if (const auto nn = fit_tree.nearest(p))
+      keep_if_facing_viewpoint(p, fit_normals[nn->index], viewpoint, out);
   return out;
 }
 
@@ -335,14 +339,9 @@ FacingSample facing_fit_points(const PointCloud& scan, const PointCloud& fit_poi
                                const std::vector<Vec3>& fit_normals, const Vec3& viewpoint) {
   if (!normals_of(scan).empty() || fit_normals.empty())
     return FacingSample{fit_points.points, fit_normals};
-  constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
   FacingSample out;
-  for (std::size_t i = 0; i < fit_points.size(); ++i) {
-    const Vec3& p = fit_points.points[i];
-    if (fit_normals[i].dot((viewpoint - p).normalized()) < kMinFacingViewpoint) continue;
-    out.points.push_back(p);
-    out.normals.push_back(fit_normals[i]);
-  }
+  for (std::size_t i = 0; i < fit_points.size(); ++i)
+    keep_if_facing_viewpoint(fit_points.points[i], fit_normals[i], viewpoint, out);
   return out;
 }
 
