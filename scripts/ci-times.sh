@@ -7,6 +7,9 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 dirs=("$@")
+# The first ten lines, reading the rest: `head` would exit early and, under pipefail, the SIGPIPE
+# that stops `sort` would fail the whole CI run after every stage had passed (exit 141).
+top_ten() { awk 'NR <= 10'; }
 ((${#dirs[@]} > 0)) || dirs=("$root/build-asan" "$root/build-tsan" "$root/build")
 for dir in "${dirs[@]}"; do
   [[ -d "$dir" ]] || continue
@@ -15,9 +18,9 @@ for dir in "${dirs[@]}"; do
     # .ninja_log v5: start_ms end_ms mtime output hash; the last entry of an output is its newest.
     awk -F'\t' 'NR > 1 && $4 ~ /\.o$/ { t[$4] = ($2 - $1) / 1000 }
                 END { for (o in t) printf "%8.1f  %s\n", t[o], o }' "$dir/.ninja_log" |
-      sort -rn | head -n 10
+      sort -rn | top_ten
   elif [[ -f "$dir/compile-times.log" ]]; then
-    sort -rn "$dir/compile-times.log" | head -n 10
+    sort -rn "$dir/compile-times.log" | top_ten
   else
     echo "   (no ninja log: a Makefile tree)"
   fi
@@ -26,6 +29,6 @@ for dir in "${dirs[@]}"; do
     echo "== $(basename "$dir"): ten slowest tests (s)"
     # Lines "name runs mean_seconds" until the "---" that starts the failed list.
     awk '/^---/ { exit } NF == 3 && $2 > 0 { printf "%8.1f  %s\n", $3, $1 }' "$cost" |
-      sort -rn | head -n 10
+      sort -rn | top_ten
   fi
 done
