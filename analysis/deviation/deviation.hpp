@@ -31,6 +31,10 @@ struct DeviationStatistics {
   double rms_mm = 0.0;
   double p95_mm = 0.0;     ///< 95th percentile of |d| (nearest rank)
   std::size_t points = 0;  ///< distances the statistics are taken over (0: none computed)
+  /// Expanded uncertainties (k = 2; docs/uncertainty.md) of p95_mm and of the largest |d|,
+  /// filled by the uncertainty stage.
+  double p95_uncertainty_mm = 0.0;
+  double max_uncertainty_mm = 0.0;
 };
 
 struct DeviationResult {

@@ -63,6 +63,8 @@ struct EdgeDeviation {
   /// At each strip's centre, in the frame of the scan points given (the result frame): where
   /// the CAD edge is and where the scan's edge is. The report draws them on the deviation map.
   std::vector<Vec3> cad_edge, scan_edge;
+  /// Expanded (k = 2) of its largest |in-plane| or |across| move (docs/uncertainty.md).
+  double uncertainty_mm = 0.0;
 };
 
 /// The measured trim edges of `flange` (outline order), from its fitted `shape` and the scan

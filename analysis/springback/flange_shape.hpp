@@ -75,6 +75,9 @@ struct FlangeShape {
   /// chirality: independent of the line's orientation).
   double twist_deg_per_100mm = 0.0;
   bool twist_measured = false;  ///< its points span min_twist_length_mm along the bend line
+  /// Expanded uncertainties (k = 2; docs/uncertainty.md), filled by the uncertainty stage.
+  double flatness_uncertainty_mm = 0.0;     ///< of flatness_max_mm
+  double curl_radius_uncertainty_mm = 0.0;  ///< of curl_radius_mm, when curled
 };
 
 /// The frame of a flange with CAD normal `normal` and bend line direction `along` (projected

@@ -96,6 +96,7 @@ struct BendStation {
   double position_mm = 0.0;  ///< along axis_direction from axis_point (CAD frame)
   double angle_deg = 0.0;    ///< measured angle there
   double springback_deg = 0.0;
+  double angle_uncertainty_deg = 0.0;  ///< expanded (k = 2), analysis/uncertainty
 };
 
 /// One bend: nominal geometry from the CAD, measured angle from the local fits. Whether it
@@ -133,6 +134,11 @@ struct BendMeasurement {
   /// False for a closed hem (nominal >= hem_angle_deg): its folded flange lies on the sheet,
   /// a flange fit cannot tell its springback; listed, never failing the part by itself.
   bool measurable = true;
+  /// Expanded uncertainties (k = 2, about 95 %; docs/uncertainty.md): this scan's fits and the
+  /// station's terms. Filled by the uncertainty stage; 0 until it ran.
+  double springback_uncertainty_deg = 0.0;
+  double angle_uncertainty_deg = 0.0;  ///< of measured_angle_deg
+  double radius_uncertainty_mm = 0.0;  ///< of measured_radius_mm
 };
 
 struct SpringbackResult {
