@@ -234,6 +234,8 @@ void JobRunner::run(const RunnerJob& job) {
   log_.info(name + ": scanned " + std::to_string(scan->size()) + " points in " +
             std::to_string(std::chrono::duration<double>(scanned - started).count()) +
             " s; analysing");
+  if (const std::string note = scanner_.last_scan_note(); !note.empty())
+    log_.warning(name + ": " + note);
   post(RunnerEvent{RunnerEvent::Kind::kAcquired, job.record, {}, {}, {}, {}});
   auto outcome = analyze_(job.request.part_id, *scan);
   if (!outcome) {

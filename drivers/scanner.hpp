@@ -32,6 +32,9 @@ class Scanner {
   virtual analysis::Expected<analysis::PointCloud> scan(const ScanProgress& progress) = 0;
   /// True while the device is present and open.
   virtual bool online() const = 0;
+  /// What the last successful scan had to do without (frames the network lost, within the
+  /// limit set), for the station's log; empty when the scan came whole.
+  virtual std::string last_scan_note() const { return {}; }
 };
 
 }  // namespace springscan::drivers

@@ -33,9 +33,16 @@ void put_u16(std::uint8_t* p, std::uint16_t v) {  // PFNC pixels are little-endi
 
 void fill_pattern(ArvBuffer* buffer, void* self, guint32, guint32, ArvPixelFormat format) {
   auto* data = static_cast<std::uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
-  static_cast<GenicamCamera*>(self)->fill(
+  const std::int64_t lost_before = static_cast<GenicamCamera*>(self)->fill(
       data, static_cast<std::uint32_t>(arv_buffer_get_image_width(buffer)),
       static_cast<std::uint32_t>(arv_buffer_get_image_height(buffer)), format);
+  // The fake camera numbers its frames itself, before the fill: a frame that was "lost" took
+  // an id that never went out, so every later frame goes out that many ids on (GVSP block ids
+  // are 16-bit and never 0).
+  if (lost_before > 0) {
+    const std::uint64_t id = arv_buffer_get_frame_id(buffer) + std::uint64_t(lost_before);
+    arv_buffer_set_frame_id(buffer, (id - 1) % 0xFFFF + 1);
+  }
 }
 
 }  // namespace
@@ -92,7 +99,9 @@ analysis::Expected<RangeImage> part_range_image(const std::string& cad_file,
 }
 
 GenicamCamera::GenicamCamera(GenicamCameraSettings settings, RangeImage image)
-    : settings_(std::move(settings)), image_(std::move(image)) {}
+    : settings_(std::move(settings)),
+      image_(std::move(image)),
+      lose_every_(settings_.lose_every_nth_frame) {}
 
 analysis::Expected<std::unique_ptr<GenicamCamera>> GenicamCamera::start(
     GenicamCameraSettings settings, RangeImage image) {
@@ -146,8 +155,8 @@ analysis::Expected<bool> GenicamCamera::open_camera() {
   return true;
 }
 
-void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t height,
-                         std::uint32_t format) {
+std::int64_t GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t height,
+                                 std::uint32_t format) {
   // Each scan opens a new stream (a new UDP port): a new destination is a new pass of the part
   // too, should watch() have missed the stop between two scans on a loaded machine.
   int port = 0;
@@ -159,8 +168,16 @@ void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t 
   stream_port_ = port;
   if (restart_.exchange(false) || new_stream) {
     cursor_ = 0;
+    frame_in_pass_ = 0;
     ++scans_;
   }
+  // A lost frame: its lines pass under the head, its id is used, nothing of it arrives.
+  if (const int every = lose_every_.load(); every > 0 && (frame_in_pass_ + 1) % every == 0) {
+    cursor_ += height;
+    ++frame_in_pass_;
+    ++lost_;
+  }
+  ++frame_in_pass_;
   const auto& s = settings_;
   const bool abc = format == 0x026000C0;  // Coord3D_ABC32f; else C16 or Mono16
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -192,6 +209,7 @@ void GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::uint32_t 
     while (!closing_.load() && !stop_.load())
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
+  return lost_.load();
 }
 
 void GenicamCamera::watch() {

@@ -3,7 +3,8 @@
 // described by simulators/genicam_camera.xml (the SFNC Scan3d features), its frames filled with
 // range lines of a simulated laser scan (simulators/parts/laser_scan.hpp) as the part passes
 // under it. The driver talks to it over real GVCP/GVSP (UDP), as to a profiler on the plant
-// network. Faults: the camera vanishes after a number of lines (and may come back).
+// network. Faults: the camera vanishes after a number of lines (and may come back), and frames
+// are lost on the way (as a congested switch or a full socket buffer drops them).
 //
 // One camera per address: GigE Vision's control port (3956) is fixed, so tests that start one
 // on 127.0.0.1 take the CTest resource lock "genicam_gvcp".
@@ -60,6 +61,9 @@ struct GenicamCameraSettings {
   /// scan were sent.
   std::int64_t vanish_after_lines = -1;
   double return_after_s = -1.0;  ///< >= 0: a vanished camera is back after this long (healthy)
+  /// > 0: every this many frames of a pass, one is lost: its lines are skipped and its block
+  /// id never reaches the wire, so the receiver sees the gap in the ids a lost frame leaves.
+  int lose_every_nth_frame = 0;
 };
 
 /// The running camera. Thread safety: all members may be called from any thread.
@@ -75,11 +79,17 @@ class GenicamCamera {
   /// A vanished camera is back (healthy) at once, as when its power returns.
   void bring_back() { bring_back_ = true; }
   std::int64_t scans_started() const { return scans_.load(); }
+  /// Frames lost so far (lose_every_nth_frame), over every pass.
+  std::int64_t frames_lost() const { return lost_.load(); }
+  /// Changes lose_every_nth_frame from the next frame on (0: no more loss).
+  void set_frame_loss(int every_nth_frame) { lose_every_.store(every_nth_frame); }
   const RangeImage& image() const { return image_; }
   const GenicamCameraSettings& settings() const { return settings_; }
 
   /// The fill of one frame (called by Aravis's camera thread); public for the C callback.
-  void fill(std::uint8_t* data, std::uint32_t width, std::uint32_t height, std::uint32_t format);
+  /// Returns the frames lost before it, over the camera's life: the offset its block id takes.
+  std::int64_t fill(std::uint8_t* data, std::uint32_t width, std::uint32_t height,
+                    std::uint32_t format);
 
  private:
   GenicamCamera(GenicamCameraSettings settings, RangeImage image);
@@ -97,9 +107,12 @@ class GenicamCamera {
   std::atomic<bool> bring_back_{false};
   std::atomic<bool> closing_{false};  // watch() is tearing the vanished camera down
   std::atomic<std::int64_t> scans_{0};
-  std::int64_t cursor_ = 0;  // the next line of the image (camera thread only)
-  void* fake_ = nullptr;     // ArvFakeCamera of camera_
-  int stream_port_ = -1;     // where the frames went last (camera thread only)
+  std::atomic<int> lose_every_{0};
+  std::atomic<std::int64_t> lost_{0};
+  std::int64_t cursor_ = 0;         // the next line of the image (camera thread only)
+  std::int64_t frame_in_pass_ = 0;  // frames of this pass so far, lost ones included (ditto)
+  void* fake_ = nullptr;            // ArvFakeCamera of camera_
+  int stream_port_ = -1;            // where the frames went last (camera thread only)
   bool vanished_once_ = false;
   std::thread watcher_;
 };

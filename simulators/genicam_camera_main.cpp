@@ -2,7 +2,7 @@
 // (simulators/genicam_camera.hpp) scanning a CAD part as produced with a chosen springback.
 //   springscan-genicam-camera --cad PART.step --springback 0.5,0.3,0.6,0.2 [--xml FILE]
 //       [--address 127.0.0.1] [--spacing MM] [--noise MM] [--frame-period-us N]
-//       [--vanish-after-lines N] [--return-after-s S] [--seed N]
+//       [--vanish-after-lines N] [--return-after-s S] [--lose-every-nth-frame N] [--seed N]
 // Prints "READY width=W lines=L x0_mm=X y0_mm=Y dy_mm=D" when it serves, then runs until
 // SIGTERM or SIGINT.
 #include <csignal>
@@ -23,7 +23,7 @@ int usage(const std::string& message) {
                "springscan-genicam-camera: %s\nusage: springscan-genicam-camera --cad FILE "
                "--springback A,B,... [--xml FILE] [--address IP] [--spacing MM] [--noise MM] "
                "[--frame-period-us N] [--vanish-after-lines N] [--return-after-s S] "
-               "[--seed N]\n",
+               "[--lose-every-nth-frame N] [--seed N]\n",
                message.c_str());
   return 2;
 }
@@ -73,6 +73,8 @@ int main(int argc, char** argv) {
       camera.vanish_after_lines = static_cast<std::int64_t>(v);
     } else if (arg == "--return-after-s") {
       camera.return_after_s = v;
+    } else if (arg == "--lose-every-nth-frame" && v >= 0.0) {
+      camera.lose_every_nth_frame = static_cast<int>(v);
     } else if (arg == "--seed" && v >= 0.0) {
       scan.seed = static_cast<std::uint64_t>(v);
     } else {

@@ -137,6 +137,15 @@ class GenicamScanner::Camera {
 GenicamScanner::GenicamScanner(GenicamSettings settings) : settings_(std::move(settings)) {}
 GenicamScanner::~GenicamScanner() = default;
 
+std::string GenicamScanner::last_scan_note() const {
+  const GenicamOutcome& o = outcome_;
+  if (o.lost_frames == 0) return {};
+  return std::to_string(o.lost_frames) + " of " + std::to_string(o.frames + o.lost_frames) +
+         " frames lost on the network (their " + std::to_string(settings_.lines_per_frame) +
+         " lines each have no points; max_lost_frames " +
+         std::to_string(settings_.max_lost_frames) + "): check the profiler's link and switch";
+}
+
 bool GenicamScanner::online() const { return camera_ != nullptr && !camera_->lost(); }
 
 analysis::Expected<DeviceInfo> GenicamScanner::identify() {

@@ -61,6 +61,7 @@ class GenicamScanner final : public Scanner {
   analysis::Expected<DeviceInfo> identify() override;
   analysis::Expected<analysis::PointCloud> scan(const ScanProgress& progress) override;
   bool online() const override;
+  std::string last_scan_note() const override;
   const GenicamOutcome& last_outcome() const { return outcome_; }
 
  private:
