@@ -297,6 +297,8 @@ RunnerEvent JobRunner::finish(const RunnerJob& job, analysis::InspectionOutcome 
   report.set_result_seq(regs::result_seq_from_record(job.record));
   report.set_result_code(static_cast<std::uint32_t>(end.result_code));
   report.mutable_input()->set_part_id(std::to_string(job.request.part_id));
+  if (job.request.part_serial != 0)
+    report.mutable_input()->set_part_serial(std::to_string(job.request.part_serial));
   if (end.result_code != regs::ResultCode::kOk) report.mutable_verdict()->set_pass(false);
   report.set_cycle_time_ms(
       std::chrono::duration<double, std::milli>(Clock::now() - job.request.trigger_time).count());

@@ -38,6 +38,8 @@ PlcControl RegisterImage::plc_control() const {
   plc.job_id = m->tab_registers[regs::kHrJobId];
   plc.part_id = m->tab_registers[regs::kHrPartId];
   plc.plc_heartbeat = m->tab_registers[regs::kHrPlcHeartbeat];
+  plc.part_serial = static_cast<std::uint32_t>(
+      regs::decode_int32(&m->tab_registers[regs::kHrPartSerial], order_));
   return plc;
 }
 

@@ -25,7 +25,8 @@ namespace springscan::daemon::regs {
 // unit id 0 as below, ERROR_DETAIL 5..8 (stalled endpoint, sequence gap, protocol error, device
 // fault), which version 1 reported as 9.
 // 4: CALIBRATION_DRIFT (discrete input 11, status word bit 11), from the check part (issue 42).
-inline constexpr std::uint16_t kMapVersion = 4;
+// 5: PART_SERIAL (holding 5-6), the individual part's serial for the gauge studies (issue 42).
+inline constexpr std::uint16_t kMapVersion = 5;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
@@ -54,14 +55,17 @@ inline constexpr std::uint16_t kDiCalibrationDrift = 11;
 inline constexpr std::uint16_t kDiCount = 12;
 
 // ------------------------------------------------------------------------------------------
-// Holding registers (FC03 read, FC06/FC16 write). 0..4 are written by the PLC; the mirrors
+// Holding registers (FC03 read, FC06/FC16 write). 0..6 are written by the PLC; the mirrors
 // below are read-only (a write answers exception 02 ILLEGAL DATA ADDRESS).
 inline constexpr std::uint16_t kHrControlWord = 0;   ///< bit i = coil i (OR-ed with the coils)
 inline constexpr std::uint16_t kHrJobId = 1;         ///< latched at the trigger edge
 inline constexpr std::uint16_t kHrPartId = 2;        ///< latched at the trigger edge
 inline constexpr std::uint16_t kHrPlcHeartbeat = 3;  ///< the PLC changes it at least every 1 s
 inline constexpr std::uint16_t kHrPageSelect = 4;    ///< page shown in the window at 800
-inline constexpr std::uint16_t kHrWritableCount = 5;
+/// The individual part's serial (uint32 in the map's word order, 0: none), latched at the
+/// trigger edge into the report's input.part_serial: the type-3 gauge study groups by it.
+inline constexpr std::uint16_t kHrPartSerial = 5;
+inline constexpr std::uint16_t kHrWritableCount = 7;
 /// Holding 10..(10+kLiveCount) mirror input registers 0..kLiveCount (read-only).
 inline constexpr std::uint16_t kHrLiveMirror = 10;
 /// Holding registers at or above 100 mirror the input registers at the same address.

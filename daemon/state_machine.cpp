@@ -106,7 +106,7 @@ void InspectionMachine::handle_trigger(const PlcControl& plc, Clock::time_point 
       ++status_.reject_count;
       step.events.push_back(MachineEvent::kTriggerRejected);
     } else {
-      job_ = JobRequest{plc.job_id, plc.part_id, now};
+      job_ = JobRequest{plc.job_id, plc.part_id, now, plc.part_serial};
       clear_result();
       status_.busy = true;
       status_.trigger_ack = true;

@@ -33,6 +33,7 @@ struct PlcControl {
   std::uint16_t job_id = 0;
   std::uint16_t part_id = 0;
   std::uint16_t plc_heartbeat = 0;
+  std::uint32_t part_serial = 0;  ///< PART_SERIAL; 0: none
 };
 
 /// The station-side bits and codes the register image shows.
@@ -60,6 +61,7 @@ struct JobRequest {
   std::uint16_t job_id = 0;
   std::uint16_t part_id = 0;
   Clock::time_point trigger_time;
+  std::uint32_t part_serial = 0;  ///< 0: the PLC gave none
 };
 
 /// How a job ended, as the runner reports it.

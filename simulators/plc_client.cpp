@@ -138,6 +138,13 @@ Expected<ResultRead> PlcClient::read_result() {
 
 Expected<CycleResult> PlcClient::trigger(std::uint16_t job_id, std::uint16_t part_id) {
   CycleResult cycle;
+  // PART_SERIAL first: the station latches it with the ids at the trigger edge.
+  if (part_serial_ != 0) {
+    std::uint16_t serial[2];
+    regs::encode_int32(static_cast<std::int32_t>(part_serial_), settings_.word_order, serial);
+    if (modbus_write_registers(ctx_, regs::kHrPartSerial, 2, serial) != 2)
+      return fail(modbus_error("write PART_SERIAL"));
+  }
   // Handshake step 2: CONTROL_WORD, JOB_ID and PART_ID in one FC16 write.
   const std::uint16_t words[3] = {static_cast<std::uint16_t>(kEnable | kTrigger), job_id, part_id};
   const auto start = Clock::now();

@@ -76,6 +76,8 @@ class PlcClient {
                                             bool ack = true);
   /// Only the first half: trigger and wait for TRIG_ACK or TRIGGER_REJECTED; drops TRIGGER.
   analysis::Expected<CycleResult> trigger(std::uint16_t job_id, std::uint16_t part_id);
+  /// PART_SERIAL written before each later trigger (0: none), as a PLC tracking parts does.
+  void set_part_serial(std::uint32_t serial) { part_serial_ = serial; }
   /// Waits for RESULT_VALID, reads the block (checking RESULT_SEQ before and after).
   analysis::Expected<CycleResult> wait_result(CycleResult cycle,
                                               std::chrono::steady_clock::time_point triggered);
@@ -104,6 +106,7 @@ class PlcClient {
   PlcClientSettings settings_;
   modbus_t* ctx_ = nullptr;
   std::uint16_t heartbeat_ = 0;
+  std::uint32_t part_serial_ = 0;
   std::chrono::steady_clock::time_point last_beat_;
 };
 

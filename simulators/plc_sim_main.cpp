@@ -1,7 +1,9 @@
 // springscan-plc-sim: a simulated PLC running the handshake N times against springscand and
 // printing each verdict and the trigger -> RESULT_VALID latency.
 //   springscan-plc-sim --port 1502 --cycles 5 --parts 3,4 [--host H] [--unit N]
-//                      [--word-order abcd|cdab] [--job-start J] [--no-heartbeat] [--timeout S]
+//                      [--word-order abcd|cdab] [--job-start J] [--serial S] [--no-heartbeat]
+//                      [--timeout S]
+// --serial S writes PART_SERIAL = S before every trigger (one physical part measured again).
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -20,7 +22,7 @@ int usage(const std::string& message) {
   std::fprintf(stderr,
                "springscan-plc-sim: %s\nusage: springscan-plc-sim --port P [--host H] "
                "[--unit N] [--word-order abcd|cdab] [--cycles N] [--parts ID,ID,...] "
-               "[--job-start J] [--no-heartbeat] [--timeout S]\n",
+               "[--job-start J] [--serial S] [--no-heartbeat] [--timeout S]\n",
                message.c_str());
   return 2;
 }
@@ -65,7 +67,7 @@ void print_cycle(int index, std::uint16_t job, std::uint16_t part, const CycleRe
 
 int main(int argc, char** argv) {
   PlcClientSettings settings;
-  long cycles = 1, job_start = 1, value = 0;
+  long cycles = 1, job_start = 1, serial = 0, value = 0;
   std::vector<std::uint16_t> parts = {1};
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -86,6 +88,8 @@ int main(int argc, char** argv) {
       cycles = value;
     } else if (arg == "--job-start" && parse_int(next, 0, 65535, value)) {
       job_start = value;
+    } else if (arg == "--serial" && parse_int(next, 1, 2147483647, value)) {
+      serial = value;
     } else if (arg == "--timeout" && parse_int(next, 1, 3600, value)) {
       settings.step_timeout_s = static_cast<double>(value);
     } else if (arg == "--word-order" &&
@@ -107,6 +111,7 @@ int main(int argc, char** argv) {
   }
   auto plc = PlcClient::connect(settings);
   if (!plc) return usage(plc.message());
+  (*plc)->set_part_serial(static_cast<std::uint32_t>(serial));
   int failures = 0;
   for (long k = 0; k < cycles; ++k) {
     const auto job = static_cast<std::uint16_t>((job_start + k) & 0xFFFF);

@@ -1,7 +1,9 @@
 #include "simulators/scanner_device.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 namespace springscan::simulators {
 namespace {
@@ -13,6 +15,27 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kFifoBytes = 256 * 1024;
 
 }  // namespace
+
+analysis::PointCloud replaced(const analysis::PointCloud& surface,
+                              const ScannerDeviceSettings& settings, std::mt19937& rng) {
+  if (!(settings.replace_mm > 0.0) && !(settings.replace_deg > 0.0)) return surface;
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  analysis::Vec3 axis;
+  do {
+    axis = analysis::Vec3(unit(rng), unit(rng), unit(rng));
+  } while (axis.norm() < 0.1 || axis.norm() > 1.0);  // uniform direction: inside the ball
+  const double angle = unit(rng) * settings.replace_deg * std::numbers::pi / 180.0;
+  const analysis::Vec3 shift =
+      settings.replace_mm * analysis::Vec3(unit(rng), unit(rng), unit(rng));
+  analysis::Vec3 centroid = analysis::Vec3::Zero();
+  for (const auto& p : surface.points) centroid += p;
+  if (!surface.points.empty()) centroid /= static_cast<double>(surface.points.size());
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  analysis::PointCloud moved = surface;
+  for (auto& p : moved.points) p = R * (p - centroid) + centroid + shift;
+  for (auto& n : moved.normals) n = R * n;
+  return moved;
+}
 
 ScannerDevice::ScannerDevice(const ScannerDeviceSettings& settings, analysis::PointCloud surface)
     : settings_(settings), surface_(std::move(surface)), rng_(settings.seed) {}
@@ -78,7 +101,8 @@ void ScannerDevice::start_scan(std::uint32_t command_sequence) {
   scan_points_ = 0;
   const double duration_us = settings_.scan_duration_s * 1e6;
   if (settings_.identity.kind == p::ScannerKind::kLaserLine) {
-    const auto profiles = laser_profiles(surface_, settings_.laser, settings_.noise, rng_);
+    const auto profiles =
+        laser_profiles(replaced(surface_, settings_, rng_), settings_.laser, settings_.noise, rng_);
     for (std::size_t k = 0; k < profiles.size(); ++k) {
       const auto t = static_cast<std::uint64_t>(duration_us * double(k) / double(profiles.size()));
       frames_.push_back(drivers::encode_laser_profile(
@@ -86,7 +110,8 @@ void ScannerDevice::start_scan(std::uint32_t command_sequence) {
       scan_points_ += profiles[k].points.size();
     }
   } else {
-    const auto records = probe_grid(surface_, settings_.probe, settings_.noise, rng_);
+    const auto records =
+        probe_grid(replaced(surface_, settings_, rng_), settings_.probe, settings_.noise, rng_);
     const auto per =
         static_cast<std::size_t>(std::clamp(settings_.probe.records_per_frame, 1, 1024));
     for (std::size_t first = 0; first < records.size(); first += per) {

@@ -44,7 +44,17 @@ struct ScannerDeviceSettings {
   double scan_duration_s = 0.0;  ///< data spread evenly over this time; 0: as fast as read
   DeviceFaults faults;           ///< injected faults
   std::uint32_t seed = 1;        ///< noise seed; each scan continues the sequence
+  /// > 0: each scan finds the part placed anew, as a loader puts it in its fixture again: moved
+  /// by up to this (uniform per axis, mm) and turned by up to replace_deg about a random axis
+  /// through the surface's centroid. The gauge studies re-place the part each cycle.
+  double replace_mm = 0.0;
+  double replace_deg = 0.0;
 };
+
+/// `surface` as placed anew within `settings.replace_mm` / `replace_deg` (drawn from `rng`);
+/// unchanged when both are 0.
+analysis::PointCloud replaced(const analysis::PointCloud& surface,
+                              const ScannerDeviceSettings& settings, std::mt19937& rng);
 
 /// Where the emulation should act on a fault that is not just bytes.
 enum class DeviceEvent { kNone, kUnplug, kHaltIn };

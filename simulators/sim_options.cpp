@@ -49,7 +49,9 @@ std::map<std::string, double*> number_options(SimOptions& o) {
           {"corrupt-at", &d.faults.corrupt_crc_at_fraction},
           {"wrong-seq-at", &d.faults.wrong_sequence_at_fraction},
           {"skip-frame-at", &d.faults.skip_frame_at_fraction},
-          {"replug-after", &o.replug_after_s}};
+          {"replug-after", &o.replug_after_s},
+          {"replace-mm", &d.replace_mm},
+          {"replace-deg", &d.replace_deg}};
 }
 
 }  // namespace
@@ -75,6 +77,9 @@ std::string sim_usage() {
          "  --skip-frame-at F\n"
          "                          faults at a share of the scan's data frames\n"
          "  --replug-after S        plug back S seconds after an unplug (default 1, <0 never)\n"
+         "  --replace-mm MM, --replace-deg DEG\n"
+         "                          each scan finds the part placed anew: moved by up to MM\n"
+         "                          and turned by up to DEG (gauge studies; default 0)\n"
          "  --seed N                noise seed (default 1)\n";
 }
 

@@ -55,6 +55,7 @@ TEST_F(HilTest, PymodbusClientWrittenFromTheDocRunsTheWholeHandshake) {
     EXPECT_EQ(c.job, 300 + static_cast<int>(k));
     const v1::InspectionReport r = report(c.seq);  // what the station stored for that result
     EXPECT_EQ(c.code, static_cast<int>(r.result_code()));
+    EXPECT_EQ(r.input().part_serial(), std::to_string(70000 + c.job));  // PART_SERIAL, 2 words
     EXPECT_EQ(c.n, std::min(r.compensation_size(), static_cast<int>(regs::kMaxVectors)));
     EXPECT_GT(c.n, 0);
     EXPECT_EQ(c.bends, r.bends_size());

@@ -26,7 +26,8 @@ TRIGGER_ENABLE, TRIGGER, RESULT_ACK, ERROR_RESET = 0, 1, 2, 3
 READY, TRIG_ACK, BUSY, RESULT_VALID, PART_OK, ERROR, TRIGGER_REJECTED = 0, 1, 2, 3, 4, 5, 6
 SCANNER_ONLINE, HEARTBEAT_BIT, PLC_COMM_LOST, RESULT_STALE = 7, 8, 9, 10
 # Holding registers.
-CONTROL_WORD, JOB_ID, PART_ID, PLC_HEARTBEAT, PAGE_SELECT = 0, 1, 2, 3, 4
+CONTROL_WORD, JOB_ID, PART_ID, PLC_HEARTBEAT, PAGE_SELECT, PART_SERIAL = 0, 1, 2, 3, 4, 5
+SERIAL_BASE = 70000  # PART_SERIAL = SERIAL_BASE + JOB_ID: above 16 bits, so both words count
 # Input registers.
 MAP_VERSION, BOOT_ID, STATE, HEARTBEAT, ERROR_CODE = 0, 1, 2, 3, 4
 ENDIAN_PROBE, STATUS_WORD, REJECT_CODE = 7, 9, 10
@@ -109,17 +110,19 @@ class Plc:
 
 def check_live_block(plc):
     live = plc.input_registers(0, 13)
-    check(live[MAP_VERSION] == 4, "MAP_VERSION %d, this client is written for 4" % live[0])
+    check(live[MAP_VERSION] == 5, "MAP_VERSION %d, this client is written for 5" % live[0])
     check(live[BOOT_ID] != 0, "BOOT_ID is never 0")
     check(live[ENDIAN_PROBE:ENDIAN_PROBE + 2] == [0x0102, 0x0304], "endianness probe (ABCD)")
     mirror = plc.holding_registers(10, 13)  # FC03 copy of input registers 0-12
-    check(mirror[MAP_VERSION] == 4 and mirror[BOOT_ID] == live[BOOT_ID], "live mirror at 10")
+    check(mirror[MAP_VERSION] == 5 and mirror[BOOT_ID] == live[BOOT_ID], "live mirror at 10")
     return live
 
 
-def trigger(plc, job, part):
-    """Handshake steps 1-3: READY, one FC16 write of CONTROL_WORD/JOB_ID/PART_ID, TRIG_ACK."""
+def trigger(plc, job, part, serial):
+    """Handshake steps 1-3: READY, PART_SERIAL, one FC16 write of CONTROL_WORD/JOB_ID/PART_ID,
+    TRIG_ACK."""
     plc.wait(READY, True, "READY = 1")
+    plc.registers(PART_SERIAL, [serial >> 16, serial & 0xFFFF])  # 32-bit, word order ABCD
     plc.registers(CONTROL_WORD, [0b011, job, part])  # TRIGGER_ENABLE + TRIGGER, the ids
     deadline = time.monotonic() + plc.timeout_s
     while True:
@@ -211,7 +214,7 @@ def print_result(r):
 
 def outage_with_a_result_pending(plc, job, part):
     """The PLC stops its heartbeat with a result unread, comes back, resets, then collects it."""
-    trigger(plc, job, part)
+    trigger(plc, job, part, SERIAL_BASE + job)
     plc.wait(RESULT_VALID, True, "RESULT_VALID = 1")
     time.sleep(4.0)  # no PLC_HEARTBEAT for longer than plc_heartbeat_timeout_s (3 s)
     bits = plc.inputs()
@@ -254,7 +257,7 @@ def main():
         seen = []
         for k in range(args.cycles):
             job = args.job + k
-            trigger(plc, job, args.part)
+            trigger(plc, job, args.part, SERIAL_BASE + job)
             plc.wait(RESULT_VALID, True, "RESULT_VALID = 1")
             result = read_result(plc)
             check(result["job"] == job and result["part"] == args.part, "ids echoed")

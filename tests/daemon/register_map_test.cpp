@@ -179,6 +179,7 @@ TEST_P(RegisterImageTest, ControlWordAndCoilsAreOred) {
   m->tab_registers[regs::kHrControlWord] = 1u << regs::kCoilTrigger;
   m->tab_registers[regs::kHrJobId] = 5;
   m->tab_registers[regs::kHrPartId] = 6;
+  regs::encode_int32(20261207, GetParam(), &m->tab_registers[regs::kHrPartSerial]);
   const PlcControl plc = image.plc_control();
   EXPECT_TRUE(plc.trigger_enable);
   EXPECT_TRUE(plc.trigger);
@@ -186,6 +187,7 @@ TEST_P(RegisterImageTest, ControlWordAndCoilsAreOred) {
   EXPECT_FALSE(plc.error_reset);
   EXPECT_EQ(plc.job_id, 5);
   EXPECT_EQ(plc.part_id, 6);
+  EXPECT_EQ(plc.part_serial, 20261207u);  // in the map's word order, as every 32-bit value
 }
 
 TEST_P(RegisterImageTest, TriggerSetThroughControlWordDropsWhenItsBitIsCleared) {

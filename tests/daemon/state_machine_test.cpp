@@ -60,11 +60,13 @@ TEST_F(MachineTest, FullHandshakeGoodPart) {
   EXPECT_EQ(machine_.status().state, State::kIdle);
   plc_.job_id = 7;
   plc_.part_id = 3;
+  plc_.part_serial = 4711;
   plc_.trigger = true;
   const MachineStep step = update();
   ASSERT_TRUE(step.start.has_value());
   EXPECT_EQ(step.start->job_id, 7);
   EXPECT_EQ(step.start->part_id, 3);
+  EXPECT_EQ(step.start->part_serial, 4711u);  // latched with the ids
   EXPECT_TRUE(machine_.status().trigger_ack);
   EXPECT_TRUE(machine_.status().busy);
   EXPECT_FALSE(machine_.status().ready);

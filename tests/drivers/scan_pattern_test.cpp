@@ -6,11 +6,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "drivers/conversion.hpp"
 #include "drivers/messages.hpp"
+#include "simulators/scanner_device.hpp"
 
 namespace springscan::simulators {
 namespace {
@@ -71,6 +73,56 @@ TEST(ScanPattern, DualHeadSeesTheWallsOneHeadMisses) {
     const double to_wall = std::min(std::abs(p.x() - 20.0), std::abs(p.x() + 20.0));
     ASSERT_LT(std::min(to_floor, to_wall), 0.01) << p.transpose();
   }
+}
+
+// A part placed anew for each scan (the gauge studies' re-placement): a rigid motion within the
+// limits set, a new one each time, none when the limits are 0.
+TEST(ReplacedPart, EachScanPlacesThePartAnewWithinTheLimitsAndRigidly) {
+  const analysis::PointCloud surface = channel();
+  ScannerDeviceSettings settings;
+  std::mt19937 rng(7);
+  const analysis::PointCloud same = replaced(surface, settings, rng);
+  ASSERT_EQ(same.points.size(), surface.points.size());
+  EXPECT_EQ(same.points.front(), surface.points.front());
+  EXPECT_EQ(same.points.back(), surface.points.back());
+
+  settings.replace_mm = 2.0;
+  settings.replace_deg = 1.0;
+  Vec3 centroid = Vec3::Zero();
+  for (const auto& p : surface.points) centroid += p;
+  centroid /= double(surface.points.size());
+  const std::size_t a = 0, b = surface.points.size() / 2, c = surface.points.size() - 1;
+  double largest_turn = 0.0, largest_shift = 0.0;
+  Vec3 previous_first = surface.points[a];
+  for (int k = 0; k < 40; ++k) {
+    const analysis::PointCloud moved = replaced(surface, settings, rng);
+    // Rigid: distances kept (three points fix the motion).
+    for (auto [i, j] : {std::pair{a, b}, std::pair{b, c}, std::pair{a, c}}) {
+      EXPECT_NEAR((moved.points[i] - moved.points[j]).norm(),
+                  (surface.points[i] - surface.points[j]).norm(), 1e-9);
+    }
+    // The turn from two directions of the part, the shift at the centroid (about which it turns).
+    const Vec3 u0 = (surface.points[b] - surface.points[a]).normalized();
+    const Vec3 u1 = (moved.points[b] - moved.points[a]).normalized();
+    const Vec3 v0 = (surface.points[c] - surface.points[a]).normalized();
+    const Vec3 v1 = (moved.points[c] - moved.points[a]).normalized();
+    const double turn_deg = std::max(std::acos(std::clamp(u0.dot(u1), -1.0, 1.0)),
+                                     std::acos(std::clamp(v0.dot(v1), -1.0, 1.0))) *
+                            180.0 / M_PI;
+    Vec3 moved_centroid = Vec3::Zero();
+    for (const auto& p : moved.points) moved_centroid += p;
+    moved_centroid /= double(moved.points.size());
+    const Vec3 shift = moved_centroid - centroid;
+    EXPECT_LE(turn_deg, 1.0 + 1e-9);
+    EXPECT_LE(shift.cwiseAbs().maxCoeff(), 2.0 + 1e-9);
+    largest_turn = std::max(largest_turn, turn_deg);
+    largest_shift = std::max(largest_shift, shift.cwiseAbs().maxCoeff());
+    EXPECT_NE(moved.points[a], previous_first);  // a new placement each time
+    previous_first = moved.points[a];
+  }
+  // The draws reach across the limits, not a corner of them.
+  EXPECT_GT(largest_turn, 0.5);
+  EXPECT_GT(largest_shift, 1.5);
 }
 
 }  // namespace
