@@ -23,45 +23,11 @@ rm -rf "$out" && mkdir -p "$out"
 "$bin/simulators/springscan-demo-part" --production "$root/demo/motor-bracket.step" \
   --springback 1.5,0.8,1.1,0.4 --surface "$out/produced-surface.ply" >/dev/null
 
-port=$(python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
-cat > "$out/springscand.textproto" <<CONFIG
-station_name: "springscan demo"
-modbus { bind_address: "127.0.0.1" port: $port allowed_clients: "127.0.0.1" }
-scanner { kind: LASER_LINE timeout_s: 5 }
-parts {
-  part_id: 1
-  name: "motor bracket"
-  cad_file: "$root/demo/motor-bracket.step"
-  settings {
-    verdict { tolerance_mm: 0.5 angle_tolerance_deg: 1.0 }
-  }
-}
-report_dir: "$out/reports"
-model_cache_dir: "$out/model-cache"
-log_level: "info"
-CONFIG
-
-# The scanner simulator presents the device and runs the daemon under it (docs/device-protocol.md):
-# a dual-head laser line scanner, heads tilted by +-30 degrees about the travel, since the
-# bracket's walls are vertical and a head looking straight down gets no return from them.
-setsid "$bin/simulators/springscan-scanner-sim" --part "$out/produced-surface.ply" --noise 0.02 \
-  --step 0.5 --points 400 --head-tilt 30 --duration 1 \
-  -- "$bin/daemon/springscand" --config "$out/springscand.textproto" \
-  >"$out/station.log" 2>&1 &
-station=$!
-stop_station() { kill -TERM -- "-$station" 2>/dev/null || true; wait "$station" 2>/dev/null || true; }
-trap stop_station EXIT
-
-for _ in $(seq 100); do  # wait until springscand listens
-  (exec 3<>"/dev/tcp/127.0.0.1/$port") 2>/dev/null && break
-  kill -0 "$station" 2>/dev/null || { cat "$out/station.log"; echo "demo: the station did not start" >&2; exit 1; }
-  sleep 0.1
-done
-
-echo "== PLC: trigger one inspection of part 1 on 127.0.0.1:$port"
-"$bin/simulators/springscan-plc-sim" --port "$port" --cycles 1 --parts 1 --timeout 120
-stop_station
-trap - EXIT
+# The station: springscand under the simulated scanner, and the simulated PLC triggering one
+# inspection of part 1 (scripts/station-lib.sh).
+source "$root/scripts/station-lib.sh"
+echo "== PLC: trigger one inspection of part 1"
+station_run "$bin" "$out" "$root/demo/motor-bracket.step" "$out/produced-surface.ply" 1
 
 report=$(ls -d "$out"/reports/r* | tail -n 1)
 echo "== station log: $out/station.log"

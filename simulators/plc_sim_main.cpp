@@ -112,6 +112,11 @@ int main(int argc, char** argv) {
   auto plc = PlcClient::connect(settings);
   if (!plc) return usage(plc.message());
   (*plc)->set_part_serial(static_cast<std::uint32_t>(serial));
+  // A station just started may not have found its scanner yet (a trigger then is refused with
+  // REJECT_CODE 5): a PLC program waits for SCANNER_ONLINE before its first part.
+  auto online = (*plc)->wait_for(
+      [](const StationStatus& s) { return s.bit(regs::kDiScannerOnline); }, "SCANNER_ONLINE = 1");
+  if (!online) return usage(online.message());
   int failures = 0;
   for (long k = 0; k < cycles; ++k) {
     const auto job = static_cast<std::uint16_t>((job_start + k) & 0xFFFF);
