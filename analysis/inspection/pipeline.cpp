@@ -20,6 +20,7 @@
 #include "analysis/messages/matching_proto.hpp"
 #include "analysis/messages/settings_proto.hpp"
 #include "analysis/messages/springback_proto.hpp"
+#include "analysis/messages/uncertainty_proto.hpp"
 #include "analysis/messages/verdict_proto.hpp"
 #include "analysis/preprocess/normals.hpp"
 #include "analysis/preprocess/reduction.hpp"
@@ -27,6 +28,7 @@
 #include "analysis/registration/facing.hpp"
 #include "analysis/registration/global_fit.hpp"
 #include "analysis/registration/orientation_settle.hpp"
+#include "analysis/uncertainty/uncertainty.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -48,6 +50,7 @@ struct PipelineSettings {
   DeformationFieldSettings field;
   CompensationSettings compensation;
   VerdictSettings verdict;
+  UncertaintySettings uncertainty;
   int threads = 0;
 };
 
@@ -63,12 +66,13 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   auto compensation = from_proto(m.compensation());
   // Every tolerance, the deviation section's tolerance_mm included, is the verdict's.
   auto verdict = verdict_settings_from_proto(m);
+  auto uncertainty = from_proto(m.uncertainty());
   for (const std::string* error :
        {threads ? nullptr : &threads.message(), normals ? nullptr : &normals.message(),
         reduction ? nullptr : &reduction.message(), fit ? nullptr : &fit.message(),
         alignment ? nullptr : &alignment.message(), springback ? nullptr : &springback.message(),
         field ? nullptr : &field.message(), compensation ? nullptr : &compensation.message(),
-        verdict ? nullptr : &verdict.message()})
+        verdict ? nullptr : &verdict.message(), uncertainty ? nullptr : &uncertainty.message()})
     if (error) return fail(*error);
   s.threads = *threads;
   s.normals = *normals;
@@ -79,6 +83,7 @@ Expected<PipelineSettings> load_settings(const v1::AnalysisSettings& m) {
   s.field = *field;
   s.compensation = *compensation;
   s.verdict = *verdict;
+  s.uncertainty = *uncertainty;
   s.springback.threads = s.field.refinement.threads = s.threads;
   s.normals.threads = s.global_fit.icp.threads = s.global_fit.pca.threads = s.threads;
   s.global_fit.boundary.threads = s.threads;
@@ -101,6 +106,7 @@ void record_settings(const PipelineSettings& s, const v1::AnalysisSettings& give
   to_proto(s.field, out->mutable_deformation_field());
   to_proto(s.compensation, out->mutable_compensation());
   to_proto(s.verdict, out->mutable_verdict());
+  to_proto(s.uncertainty, out->mutable_uncertainty());
   out->set_threads(s.threads);
 }
 
@@ -162,6 +168,13 @@ PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviat
   return scan_in_cad;
 }
 
+// The diagonal of the points' extent: the length a calibration's length error spreads over.
+double part_extent_mm(const PointCloud& cloud) {
+  if (cloud.empty()) return 0.0;
+  const auto [lo, hi] = bounding_box(cloud.points);
+  return (hi - lo).norm();
+}
+
 // Stages 6-7: local best fits of the CAD flanges and the bend table (docs/springback.md). A
 // model without flanges has no bends to measure; a model the stage cannot use (no face ids)
 // gives a warning rather than failing the whole inspection.
@@ -169,14 +182,17 @@ PointCloud deviation_cloud(PointCloud scan_in_cad, const DeviationResult& deviat
 // (its bends), if it ran.
 std::optional<SpringbackResult> add_bend_table(const PartModel& model,
                                                const PointCloud& scan_in_cad,
-                                               const SpringbackSettings& settings,
+                                               const PipelineSettings& settings,
                                                v1::InspectionReport& report) {
   if (model.segmentation.flanges.empty()) return std::nullopt;
-  auto result = measure_springback(model, scan_in_cad, settings);
+  auto result = measure_springback(model, scan_in_cad, settings.springback);
   if (!result) {
     report.add_warnings(result.message());
     return std::nullopt;
   }
+  // 7b. The expanded uncertainty of every value it measured (docs/uncertainty.md).
+  attach_uncertainty(
+      estimate_uncertainty(*result, part_extent_mm(scan_in_cad), settings.uncertainty), *result);
   fill_springback_report(*result, report);
   for (const BendMeasurement& bend : result->bends)
     if (!bend.measured) report.add_warnings(bend.status);
@@ -511,7 +527,16 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 6-7. Local best fits per flange and springback per bend (paper §4, automated).
-  const auto springback = add_bend_table(model, out.deviation_cloud, config->springback, report);
+  const auto springback = add_bend_table(model, out.deviation_cloud, *config, report);
+  // The surface statistic's U: the flanges' noise (else the fit's residual), the frame's U.
+  attach_deviation_uncertainty(springback ? part_noise_mm(*springback) : fit_rms_residual_mm,
+                               report.alignment().uncertainty_translation_mm(),
+                               part_extent_mm(out.deviation_cloud), config->uncertainty,
+                               deviation->statistics);
+  report.mutable_deviation()->set_uncertainty_mm(config->verdict.deviation_statistic ==
+                                                         DeviationStatistic::kMax
+                                                     ? deviation->statistics.max_uncertainty_mm
+                                                     : deviation->statistics.p95_uncertainty_mm);
   timings.set_local_fits(ms_since(t));
 
   t = Clock::now();

@@ -23,6 +23,7 @@ void edge_to_proto(const EdgeDeviation& e, v1::EdgeDeviation& out) {
   to_proto(e.direction, *out.mutable_direction());
   to_proto(e.outward, *out.mutable_outward());
   out.set_length_mm(e.length_mm);
+  out.set_uncertainty_mm(e.uncertainty_mm);
   for (const Vec3& p : e.cad_edge) to_proto(p, *out.add_cad_edge());
   for (const Vec3& p : e.scan_edge) to_proto(p, *out.add_scan_edge());
 }
@@ -34,8 +35,11 @@ void shape_to_proto(const FlangeFit& flange, v1::Segment& s) {
   if (!shape.measured) return;
   s.set_flatness_mm(shape.flatness_max_mm);
   s.set_flatness_rms_mm(shape.flatness_rms_mm);
-  if (shape.curled && std::isfinite(shape.curl_radius_mm))
+  s.set_flatness_uncertainty_mm(shape.flatness_uncertainty_mm);
+  if (shape.curled && std::isfinite(shape.curl_radius_mm)) {
     s.set_curl_radius_mm(shape.curl_radius_mm);
+    s.set_curl_radius_uncertainty_mm(shape.curl_radius_uncertainty_mm);
+  }
   if (flange.has_bend_line && shape.twist_measured)
     s.set_twist_deg_per_100mm(shape.twist_deg_per_100mm);
   for (const EdgeDeviation& e : flange.trim_edges) {
@@ -49,6 +53,7 @@ void bend_shape_to_proto(const BendMeasurement& m, v1::Bend& b) {
   if (m.zone.fitted) {
     b.set_measured_radius_mm(m.measured_radius_mm);
     b.set_zone_rms_mm(m.zone.rms_mm);
+    b.set_radius_uncertainty_mm(m.radius_uncertainty_mm);
   }
   if (!m.measured) return;
   b.set_plane_angle_deg(m.plane_angle_deg);
@@ -58,6 +63,7 @@ void bend_shape_to_proto(const BendMeasurement& m, v1::Bend& b) {
     out.set_position_mm(station.position_mm);
     out.set_angle_deg(station.angle_deg);
     out.set_springback_deg(station.springback_deg);
+    out.set_angle_uncertainty_deg(station.angle_uncertainty_deg);
   }
   b.set_angle_min_deg(m.angle_min_deg);
   b.set_angle_max_deg(m.angle_max_deg);
@@ -107,6 +113,8 @@ void fill_springback_report(const SpringbackResult& result, v1::InspectionReport
     if (!m.measured) continue;  // angles stay unset (0) when nothing was measured
     b.set_measured_angle_deg(m.measured_angle_deg);
     b.set_springback_deg(m.springback_deg);
+    b.set_angle_uncertainty_deg(m.angle_uncertainty_deg);
+    b.set_springback_uncertainty_deg(m.springback_uncertainty_deg);
   }
 }
 

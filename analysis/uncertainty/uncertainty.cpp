@@ -1,0 +1,312 @@
+// The uncertainty stage (uncertainty.hpp, docs/uncertainty.md): GUM propagation from each
+// flange's own points, the method's residual error and the station's terms.
+#include "analysis/uncertainty/uncertainty.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "analysis/uncertainty/fit_covariance.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+// Where a curled flange's end tangent is taken, to about this (standard, mm): the calibration
+// study's curled walls (docs/uncertainty.md) show end-tangent errors of 0.14-0.25 mm over R.
+constexpr double kTangentPointMm = 0.2;
+
+// One flange's fits as the uncertainty sees them.
+struct FlangeModel {
+  const FlangeFit* fit = nullptr;
+  PlaneCovariance plane;
+  CurlCovariance curl;  // curled flanges only
+  bool ok = false;
+};
+
+double sq(double x) { return x * x; }
+
+// Root sum of squares.
+double rss(std::initializer_list<double> terms) {
+  double sum = 0.0;
+  for (double t : terms) sum += t * t;
+  return std::sqrt(sum);
+}
+
+// The lower median of the flanges' plane residuals: the part's point noise as the fits see it
+// (a flange that departs from its plane only raises the upper half).
+double part_noise(const std::vector<FlangeModel>& flanges) {
+  std::vector<double> sigma;
+  for (const FlangeModel& f : flanges)
+    if (f.ok) sigma.push_back(f.curl.ok ? f.curl.sigma_mm : f.plane.sigma_mm);
+  if (sigma.empty()) return 0.0;
+  std::sort(sigma.begin(), sigma.end());
+  return sigma[(sigma.size() - 1) / 2];
+}
+
+// The unit in-plane direction across a bend with axis `axis`, in the flange's (s, t) frame.
+Eigen::Vector2d across_in_frame(const FlangeFrame& frame, const Vec3& axis) {
+  const Vec3 across = frame.n.cross(axis);
+  const Eigen::Vector2d w(across.dot(frame.u), across.dot(frame.d));
+  return w.norm() > 1e-9 ? Eigen::Vector2d(w.normalized()) : Eigen::Vector2d(1.0, 0.0);
+}
+
+struct Tilt {
+  double fit_var = std::numeric_limits<double>::infinity();  // rad^2, from the points' noise
+  double shape_rad = 0.0;  // the method's error: residual above the noise, as a whole tilt
+  double end_tangent_rad = 0.0;  // the method's error of an end tangent on a curled flange
+};
+
+// How well flange f fixes its tilt across a bend of axis `axis` (through `axis_point`): its
+// plane, or the end tangent of its curl when the bend is measured by end tangents.
+Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point, bool end_tangent,
+                 double noise, double floor_sigma) {
+  Tilt out;
+  if (!f.ok) return out;
+  const FlangeShape& shape = f.fit->shape;
+  const Eigen::Vector2d w = across_in_frame(shape.frame, axis);
+  const bool curl = end_tangent && shape.curled && f.curl.ok;
+  const double sigma = curl ? f.curl.sigma_mm : f.plane.sigma_mm;
+  const double used = std::max(sigma, floor_sigma);
+  if (curl) {
+    const double s_end = shape.frame.local(axis_point).x();
+    out.fit_var = sq(w.x()) * f.curl.slope_s_variance(s_end, 0.0, used) +
+                  sq(w.y()) * f.curl.slope_t_variance(s_end, used);
+    // The method's own error: the end tangent is taken where the section meets the bend, a
+    // point the study (docs/uncertainty.md) finds placed to about kTangentPointMm, which turns
+    // the tangent by that over the curl radius.
+    out.end_tangent_rad = kTangentPointMm / std::abs(shape.curl_radius_mm);
+  } else {
+    out.fit_var = f.plane.slope_variance(w, used);
+  }
+  // A residual above the part's noise is a shape the model does not follow (leakage of the bend
+  // zone, an undetected curl, a wave): correlated over the flange, it tilts the fit as a whole,
+  // so its error does not shrink with the point count.
+  // Only the excess beyond what the variance estimate's own scatter explains (3 of its standard
+  // errors, sqrt(2 / n) relative): a residual of 0.0200 against a noise of 0.0198 is noise.
+  const double spread = f.plane.spread_mm(w);
+  const double n = static_cast<double>(curl ? f.curl.points : f.plane.points);
+  const double expected = sq(std::max(noise, floor_sigma)) * (1.0 + 3.0 * std::sqrt(2.0 / n));
+  const double systematic = std::sqrt(std::max(0.0, sq(sigma) - expected));
+  // As a bow (a curl too slight to be told, whose angle the end tangents define), a residual of
+  // rms r over a spread of rms S turns the end from the plane by up to 3.9 r / S (a parabola);
+  // uniform within that: u = 3.9 / sqrt(3) r / S.
+  constexpr double kBowFactor = 2.25;
+  out.shape_rad =
+      spread > 0.0 ? kBowFactor * systematic / spread : std::numeric_limits<double>::infinity();
+  return out;
+}
+
+// The station terms of an angle (degrees, standard): the calibration's angle, and its length
+// error over the part's extent as a turn.
+double station_angle_deg(const UncertaintySettings& st, double extent_mm) {
+  const double length_turn =
+      extent_mm > 0.0 ? st.calibration_length_mm / extent_mm * kRadToDeg : 0.0;
+  return rss({st.calibration_angle_deg, length_turn});
+}
+
+// Station k's strip of a flange: points whose position along the axis lies within half a window.
+double strip_tilt_var(const FlangeModel& f, const BendMeasurement& m, double position,
+                      double window, double floor_sigma) {
+  if (!f.ok) return std::numeric_limits<double>::infinity();
+  const FlangeShape& shape = f.fit->shape;
+  const FlangeFrame& fr = shape.frame;
+  const Vec3& a = m.axis_direction;
+  const Vec3 along(fr.u.dot(a), fr.d.dot(a), fr.n.dot(a));
+  const double offset = (fr.origin - m.axis_point).dot(a) - position;
+  const auto keep = [&](const Vec3& q) { return std::abs(offset + along.dot(q)) <= 0.5 * window; };
+  // A curled flange's strips hold its curvature (StripFit): the curl term comes off first, and
+  // the curvature's own error is added below.
+  const double A = shape.curled ? shape.surface.A : 0.0;
+  const auto held = [A](const Vec3& q) { return A * (q.x() * q.x() + q.z() * q.z()); };
+  const PlaneCovariance strip =
+      plane_covariance(shape.local, shape.inlier, keep,
+                       A != 0.0 ? std::function<double(const Vec3&)>(held) : nullptr);
+  if (!strip.ok) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector2d w = across_in_frame(fr, a);
+  double var = strip.slope_variance(w, std::max(strip.sigma_mm, floor_sigma));
+  if (A != 0.0 && f.curl.ok) {
+    const double s_end = fr.local(m.axis_point).x();
+    var += sq(2.0 * s_end) * f.curl.a_variance(std::max(f.curl.sigma_mm, floor_sigma));
+  }
+  return var;
+}
+
+// The stations' window along the bend: the least gap between neighbouring stations (their
+// centres lie a whole number of windows apart), or the whole flange for a single station.
+double station_window(const BendMeasurement& m) {
+  double window = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 1; k < m.stations.size(); ++k)
+    window = std::min(window, m.stations[k].position_mm - m.stations[k - 1].position_mm);
+  return window;
+}
+
+BendBudget bend_budget(const BendMeasurement& m, const FlangeModel& a, const FlangeModel& b,
+                       double noise, double extent_mm, const UncertaintySettings& st) {
+  BendBudget out;
+  const Vec3 axis = m.axis_direction.normalized();
+  const double floor_sigma = st.scanner_sigma_mm;
+  const Tilt ta = flange_tilt(a, axis, m.axis_point, m.end_tangents, noise, floor_sigma);
+  const Tilt tb = flange_tilt(b, axis, m.axis_point, m.end_tangents, noise, floor_sigma);
+  out.fit_deg = std::sqrt(ta.fit_var + tb.fit_var) * kRadToDeg;
+  // Flanges whose shape was not measured (too few points): the stage's own estimate, no less.
+  if (!std::isfinite(out.fit_deg)) out.fit_deg = 3.0 * m.angle_sigma_deg;
+  out.shape_deg =
+      rss({ta.shape_rad, tb.shape_rad, ta.end_tangent_rad, tb.end_tangent_rad}) * kRadToDeg;
+  out.station_deg = station_angle_deg(st, extent_mm);
+  out.angle_deg = rss({out.fit_deg, out.shape_deg, out.station_deg});
+  if (!std::isfinite(out.angle_deg)) out.angle_deg = 180.0;  // not fixed at all: says so
+  const double window = station_window(m);
+  for (const BendStation& s : m.stations) {
+    const double w = std::isfinite(window) ? window : 1e9;
+    const double fit = std::sqrt(strip_tilt_var(a, m, s.position_mm, w, floor_sigma) +
+                                 strip_tilt_var(b, m, s.position_mm, w, floor_sigma)) *
+                       kRadToDeg;
+    const double u = rss({fit, out.shape_deg, out.station_deg});
+    out.station_angle_deg.push_back(std::isfinite(u) ? u : 180.0);
+  }
+  if (m.zone.fitted) {
+    const double sweep = std::abs(m.measured ? m.measured_angle_deg : m.nominal_angle_deg);
+    const double fit = std::sqrt(arc_radius_variance(
+        sweep / kRadToDeg, m.zone.inliers, std::max(m.zone.rms_mm, floor_sigma)));
+    const double scale = extent_mm > 0.0 ? st.calibration_length_mm / extent_mm : 0.0;
+    const double thermal = st.expansion_per_k * std::abs(st.temperature_delta_k) / std::sqrt(3.0);
+    // The method's own error beyond the arc's noise (the wedge between the tangent lines, the
+    // axis' tilt): 0.6 of the zone's rms, as the calibration study shows (docs/uncertainty.md).
+    constexpr double kZoneMethodFactor = 0.6;
+    out.radius_mm = rss({fit, kZoneMethodFactor * std::max(m.zone.rms_mm, floor_sigma),
+                         (scale + thermal) * m.measured_radius_mm});
+    if (!std::isfinite(out.radius_mm)) out.radius_mm = m.measured_radius_mm;
+  }
+  return out;
+}
+
+FlangeBudget flange_budget(const FlangeModel& f, double noise, double extent_mm,
+                           const UncertaintySettings& st) {
+  FlangeBudget out;
+  const FlangeShape& shape = f.fit->shape;
+  if (!shape.measured) return out;
+  const double floor_sigma = st.scanner_sigma_mm;
+  const double thermal_mm =
+      st.expansion_per_k * std::abs(st.temperature_delta_k) * extent_mm / std::sqrt(3.0);
+  // Flatness is the largest inlier's distance from the plane: noise raises it by up to the
+  // inlier band (3 robust sigmas), which is its expanded uncertainty (standard: half of it).
+  const double band = std::max(shape.inlier_threshold_mm, 3.0 * std::max(noise, floor_sigma));
+  out.flatness_mm = rss({band / st.coverage_factor, st.calibration_length_mm});
+  if (shape.curled && f.curl.ok && std::isfinite(shape.curl_radius_mm)) {
+    // Curvature 1/R = 2A / sqrt(...) ~ 2A near the middle: u(R) = R^2 u(1/R) = 2 R^2 u(A).
+    const double sigma_a = std::sqrt(f.curl.a_variance(std::max(f.curl.sigma_mm, floor_sigma)));
+    out.curl_radius_mm = 2.0 * sq(shape.curl_radius_mm) * sigma_a;
+  }
+  // A trim edge is the extreme of the points in strips: short of the true edge by up to one
+  // point spacing, plus the noise; spacing from the points' spread (an even rectangle).
+  const double area = 12.0 * std::sqrt(std::max(0.0, f.plane.scatter.determinant()));
+  const double spacing =
+      f.plane.points > 0 ? std::sqrt(area / static_cast<double>(f.plane.points)) : 0.0;
+  out.edge_mm = rss({spacing, std::max(noise, floor_sigma), st.calibration_length_mm, thermal_mm});
+  return out;
+}
+
+}  // namespace
+
+std::optional<Error> validate(const UncertaintySettings& st) {
+  const auto bad = [](const char* field, double value, const char* rule) {
+    return fail(ErrorCode::kInvalidSettings, std::string("settings: uncertainty.") + field + " = " +
+                                                 std::to_string(value) + " (" + rule + ")");
+  };
+  const auto in = [](double v, double lo, double hi) {
+    return std::isfinite(v) && v >= lo && v <= hi;
+  };
+  if (!in(st.scanner_sigma_mm, 0.0, 10.0))
+    return bad("scanner_sigma_mm", st.scanner_sigma_mm, "0 to 10");
+  if (!in(st.calibration_angle_deg, 0.0, 10.0))
+    return bad("calibration_angle_deg", st.calibration_angle_deg, "0 to 10");
+  if (!in(st.calibration_length_mm, 0.0, 10.0))
+    return bad("calibration_length_mm", st.calibration_length_mm, "0 to 10");
+  if (!in(st.temperature_delta_k, -100.0, 100.0))
+    return bad("temperature_delta_k", st.temperature_delta_k, "-100 to 100");
+  if (!in(st.expansion_per_k, 0.0, 1e-3))
+    return bad("expansion_per_k", st.expansion_per_k, "0 to 1e-3");
+  if (!in(st.coverage_factor, 1.0, 10.0))
+    return bad("coverage_factor", st.coverage_factor, "1 to 10");
+  return std::nullopt;
+}
+
+UncertaintyResult estimate_uncertainty(const SpringbackResult& sb, double extent_mm,
+                                       const UncertaintySettings& st) {
+  UncertaintyResult out;
+  out.coverage_factor = st.coverage_factor;
+  // 1. Each flange's plane (and curl) covariance from its own inlier points.
+  std::vector<FlangeModel> flanges(sb.flanges.size());
+  for (std::size_t f = 0; f < sb.flanges.size(); ++f) {
+    FlangeModel& model = flanges[f];
+    model.fit = &sb.flanges[f];
+    const FlangeShape& shape = model.fit->shape;
+    if (!model.fit->fitted || !shape.measured) continue;
+    model.plane = plane_covariance(shape.local, shape.inlier);
+    if (shape.curled) model.curl = curl_covariance(shape.local, shape.inlier);
+    model.ok = model.plane.ok;
+  }
+  out.noise_mm = std::max(part_noise(flanges), st.scanner_sigma_mm);
+  // 2. Each bend's angle, stations and radius; 3. each flange's shape values.
+  const auto flange_of = [&](int id) -> const FlangeModel& {
+    static const FlangeModel kNone;
+    for (const FlangeModel& f : flanges)
+      if (f.fit->flange_id == id) return f;
+    return kNone;
+  };
+  for (const BendMeasurement& m : sb.bends)
+    out.bends.push_back(
+        bend_budget(m, flange_of(m.flange_a), flange_of(m.flange_b), out.noise_mm, extent_mm, st));
+  for (const FlangeModel& f : flanges)
+    out.flanges.push_back(flange_budget(f, out.noise_mm, extent_mm, st));
+  return out;
+}
+
+void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb) {
+  const double k = u.coverage_factor;
+  for (std::size_t b = 0; b < sb.bends.size() && b < u.bends.size(); ++b) {
+    BendMeasurement& m = sb.bends[b];
+    const BendBudget& budget = u.bends[b];
+    if (m.zone.fitted) m.radius_uncertainty_mm = k * budget.radius_mm;
+    if (!m.measured) continue;
+    m.angle_uncertainty_deg = m.springback_uncertainty_deg = k * budget.angle_deg;
+    for (std::size_t s = 0; s < m.stations.size() && s < budget.station_angle_deg.size(); ++s)
+      m.stations[s].angle_uncertainty_deg = k * budget.station_angle_deg[s];
+  }
+  for (std::size_t f = 0; f < sb.flanges.size() && f < u.flanges.size(); ++f) {
+    FlangeFit& flange = sb.flanges[f];
+    if (!flange.shape.measured) continue;
+    flange.shape.flatness_uncertainty_mm = k * u.flanges[f].flatness_mm;
+    if (flange.shape.curled) flange.shape.curl_radius_uncertainty_mm = k * u.flanges[f].curl_radius_mm;
+    for (EdgeDeviation& e : flange.trim_edges)
+      if (e.measured) e.uncertainty_mm = k * u.flanges[f].edge_mm;
+  }
+}
+
+double part_noise_mm(const SpringbackResult& sb) {
+  std::vector<double> rms;
+  for (const FlangeFit& f : sb.flanges)
+    if (f.fitted && f.shape.measured) rms.push_back(f.shape.flatness_rms_mm);
+  if (rms.empty()) return 0.0;
+  std::sort(rms.begin(), rms.end());
+  return rms[(rms.size() - 1) / 2];
+}
+
+void attach_deviation_uncertainty(double noise_mm, double frame_translation_mm,
+                                  double part_extent_mm, const UncertaintySettings& st,
+                                  DeviationStatistics& statistics) {
+  if (statistics.points == 0) return;
+  const double k = st.coverage_factor;
+  const double thermal =
+      st.expansion_per_k * std::abs(st.temperature_delta_k) * part_extent_mm / std::sqrt(3.0);
+  const double noise = std::max(noise_mm, st.scanner_sigma_mm);
+  // p95 of |d| over many points: the noise widens it by about its own sigma; one point (the
+  // largest |d|) carries its noise and, as an extreme, up to ~3 sigmas of it.
+  const double common = rss({frame_translation_mm / k, st.calibration_length_mm, thermal});
+  statistics.p95_uncertainty_mm = k * rss({noise, common});
+  statistics.max_uncertainty_mm = k * rss({1.5 * noise, common});
+}
+
+}  // namespace springscan::analysis

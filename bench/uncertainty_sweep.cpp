@@ -1,0 +1,90 @@
+// The calibration study of the expanded uncertainties (docs/uncertainty.md, issue 41): parts of
+// every family scanned at fresh seeds and poses, each reported value's |measured - true| against
+// its U, and the coverage table per kind of value and family.
+//
+//   ./build/bench/uncertainty_sweep --seed S [--cases N] [--production N] [--points P]
+//
+// --cases profile cases per profile family (clean, noisy, curled wall, short flange);
+// --production cases per production family (sigma 0.02; 0.05 with 2 % outliers; one-sided view).
+// Exit 1 on a crash only: the table is for the docs and for CI's log.
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <string>
+
+#include "tests/analysis/uncertainty/coverage_study.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+const std::vector<std::string>& production_parts() {
+  static const std::vector<std::string> names = {
+      "openamr-MMP.03.00.00.003_Motor_bracket.step", "openamr-MMP.01.00.00.002_Cover_flange.step",
+      "openamr-MMP.00.00.00.003_Side_panel.step", "openamr-MMP.00.00.00.001_Front_panel.step",
+      "nema-17-bracket.step"};
+  return names;
+}
+
+int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
+  std::printf("uncertainty_sweep --seed %llu --cases %d --production %d --points %lld\n",
+              static_cast<unsigned long long>(seed), cases, production,
+              static_cast<long long>(points));
+  std::mt19937_64 rng(seed);
+  std::vector<testing::CoverageSample> samples;
+  int crashes = 0;
+  using testing::ProfileFamily;
+  for (ProfileFamily f : {ProfileFamily::kClean, ProfileFamily::kNoisy, ProfileFamily::kCurled,
+                          ProfileFamily::kShortFlange})
+    for (int k = 0; k < cases; ++k) try {
+        testing::run_profile_case(f, rng, points / 4, samples);
+      } catch (const std::exception& e) {
+        ++crashes;
+        std::printf("CRASH: %s\n", e.what());
+      }
+  for (int k = 0; k < production; ++k)
+    for (int variant = 0; variant < 3; ++variant) try {
+        const std::string& part = production_parts()[rng() % production_parts().size()];
+        testing::run_production_case(part, variant == 1 ? 0.05 : 0.02, variant == 2, rng, points,
+                                     samples);
+      } catch (const std::exception& e) {
+        ++crashes;
+        std::printf("CRASH: %s\n", e.what());
+      }
+  for (const testing::CoverageSample& s : samples)
+    std::printf("%s | %s | error %+.4f U %.4f%s\n", s.kind.c_str(), s.family.c_str(), s.error,
+                s.U, std::abs(s.error) > s.U ? "  OUTSIDE" : "");
+  testing::print_table(testing::coverage_table(samples));
+  return crashes == 0 ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace springscan::analysis
+
+int main(int argc, char** argv) {
+  std::uint64_t seed = 1;
+  int cases = 6, production = 4;
+  std::int64_t points = 200'000;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (arg == "--seed" && has_value) {
+      seed = std::strtoull(argv[++i], nullptr, 0);
+    } else if (arg == "--cases" && has_value) {
+      cases = std::atoi(argv[++i]);
+    } else if (arg == "--production" && has_value) {
+      production = std::atoi(argv[++i]);
+    } else if (arg == "--points" && has_value) {
+      points = std::atoll(argv[++i]);
+    } else {
+      std::fprintf(stderr,
+                   "usage: uncertainty_sweep [--seed S] [--cases N] [--production N] "
+                   "[--points P]\n");
+      return 2;
+    }
+  }
+  if (cases < 0 || production < 0 || points < 4000) {
+    std::fprintf(stderr, "uncertainty_sweep: --cases, --production >= 0 and --points >= 4000\n");
+    return 2;
+  }
+  return springscan::analysis::run(seed, cases, production, points);
+}
