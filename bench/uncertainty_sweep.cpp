@@ -51,8 +51,8 @@ int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
         std::printf("CRASH: %s\n", e.what());
       }
   for (const testing::CoverageSample& s : samples)
-    std::printf("%s | %s | error %+.4f U %.4f%s\n", s.kind.c_str(), s.family.c_str(), s.error,
-                s.U, std::abs(s.error) > s.U ? "  OUTSIDE" : "");
+    std::printf("%s | %s | error %+.4f U %.4f%s\n", s.kind.c_str(), s.family.c_str(), s.error, s.U,
+                std::abs(s.error) > s.U ? "  OUTSIDE" : "");
   testing::print_table(testing::coverage_table(samples));
   return crashes == 0 ? 0 : 1;
 }

@@ -13,7 +13,8 @@ bool invert(const Eigen::Matrix<double, N, N>& normal, Eigen::Matrix<double, N, 
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, N, N>> eig(normal);
   const auto& values = eig.eigenvalues();
   if (!(values(0) > 1e-12 * values(N - 1)) || !(values(0) > 0.0)) return false;
-  inverse = eig.eigenvectors() * values.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
+  inverse =
+      eig.eigenvectors() * values.cwiseInverse().asDiagonal() * eig.eigenvectors().transpose();
   return true;
 }
 

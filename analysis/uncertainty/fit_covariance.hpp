@@ -18,11 +18,11 @@ namespace springscan::analysis {
 
 /// h = c + b_s s + b_t t over the chosen points.
 struct PlaneCovariance {
-  bool ok = false;            ///< at least 6 points that fix both slopes
+  bool ok = false;  ///< at least 6 points that fix both slopes
   std::size_t points = 0;
-  double sigma_mm = 0.0;       ///< rms residual over n - 3 degrees of freedom
+  double sigma_mm = 0.0;  ///< rms residual over n - 3 degrees of freedom
   Eigen::Matrix3d inverse_normal = Eigen::Matrix3d::Zero();  ///< (X^T X)^-1, order (c, b_s, b_t)
-  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();  ///< in-plane (s, t) scatter / n, mm^2
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();         ///< in-plane (s, t) scatter / n, mm^2
   /// The slope's variance in the in-plane direction w = (w_s, w_t) (unit), for noise sigma:
   /// the tilt variance (rad^2) across a bend whose across direction is w.
   double slope_variance(const Eigen::Vector2d& w, double noise_mm) const {

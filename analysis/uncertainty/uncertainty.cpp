@@ -54,14 +54,14 @@ Eigen::Vector2d across_in_frame(const FlangeFrame& frame, const Vec3& axis) {
 
 struct Tilt {
   double fit_var = std::numeric_limits<double>::infinity();  // rad^2, from the points' noise
-  double shape_rad = 0.0;  // the method's error: residual above the noise, as a whole tilt
+  double shape_rad = 0.0;        // the method's error: residual above the noise, as a whole tilt
   double end_tangent_rad = 0.0;  // the method's error of an end tangent on a curled flange
 };
 
 // How well flange f fixes its tilt across a bend of axis `axis` (through `axis_point`): its
 // plane, or the end tangent of its curl when the bend is measured by end tangents.
 Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point, bool end_tangent,
-                 double noise, double floor_sigma) {
+                 double floor_sigma) {
   Tilt out;
   if (!f.ok) return out;
   const FlangeShape& shape = f.fit->shape;
@@ -80,19 +80,21 @@ Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point,
   } else {
     out.fit_var = f.plane.slope_variance(w, used);
   }
-  // A residual above the part's noise is a shape the model does not follow (leakage of the bend
-  // zone, an undetected curl, a wave): correlated over the flange, it tilts the fit as a whole,
-  // so its error does not shrink with the point count.
-  // Only the excess beyond what the variance estimate's own scatter explains (3 of its standard
-  // errors, sqrt(2 / n) relative): a residual of 0.0200 against a noise of 0.0198 is noise.
-  const double spread = f.plane.spread_mm(w);
-  const double n = static_cast<double>(curl ? f.curl.points : f.plane.points);
-  const double expected = sq(std::max(noise, floor_sigma)) * (1.0 + 3.0 * std::sqrt(2.0 / n));
-  const double systematic = std::sqrt(std::max(0.0, sq(sigma) - expected));
-  // As a bow (a curl too slight to be told, whose angle the end tangents define), a residual of
-  // rms r over a spread of rms S turns the end from the plane by up to 3.9 r / S (a parabola);
-  // uniform within that: u = 3.9 / sqrt(3) r / S.
+  // A bow the plane does not follow (a curl too slight to be told, whose angle the end tangents
+  // would define): what the curl model explains of the plane's residual variance, beyond what
+  // the variance estimate's own scatter explains (3 of its standard errors, sqrt(2 / n)
+  // relative). Not against other flanges' noise: a laser's noise along its beam differs from
+  // flange to flange with the view. Correlated over the flange, its error does not shrink with
+  // the point count. A residual of rms r over a spread of rms S turns the end from the plane by
+  // up to 3.9 r / S (a parabola); uniform within that: u = 3.9 / sqrt(3) r / S.
   constexpr double kBowFactor = 2.25;
+  const double spread = f.plane.spread_mm(w);
+  double systematic = 0.0;
+  if (!curl && f.curl.ok) {
+    const double n = static_cast<double>(f.curl.points);
+    systematic = std::sqrt(std::max(
+        0.0, sq(f.plane.sigma_mm) - sq(f.curl.sigma_mm) * (1.0 + 3.0 * std::sqrt(2.0 / n))));
+  }
   out.shape_rad =
       spread > 0.0 ? kBowFactor * systematic / spread : std::numeric_limits<double>::infinity();
   return out;
@@ -143,12 +145,12 @@ double station_window(const BendMeasurement& m) {
 }
 
 BendBudget bend_budget(const BendMeasurement& m, const FlangeModel& a, const FlangeModel& b,
-                       double noise, double extent_mm, const UncertaintySettings& st) {
+                       double extent_mm, const UncertaintySettings& st) {
   BendBudget out;
   const Vec3 axis = m.axis_direction.normalized();
   const double floor_sigma = st.scanner_sigma_mm;
-  const Tilt ta = flange_tilt(a, axis, m.axis_point, m.end_tangents, noise, floor_sigma);
-  const Tilt tb = flange_tilt(b, axis, m.axis_point, m.end_tangents, noise, floor_sigma);
+  const Tilt ta = flange_tilt(a, axis, m.axis_point, m.end_tangents, floor_sigma);
+  const Tilt tb = flange_tilt(b, axis, m.axis_point, m.end_tangents, floor_sigma);
   out.fit_deg = std::sqrt(ta.fit_var + tb.fit_var) * kRadToDeg;
   // Flanges whose shape was not measured (too few points): the stage's own estimate, no less.
   if (!std::isfinite(out.fit_deg)) out.fit_deg = 3.0 * m.angle_sigma_deg;
@@ -168,8 +170,8 @@ BendBudget bend_budget(const BendMeasurement& m, const FlangeModel& a, const Fla
   }
   if (m.zone.fitted) {
     const double sweep = std::abs(m.measured ? m.measured_angle_deg : m.nominal_angle_deg);
-    const double fit = std::sqrt(arc_radius_variance(
-        sweep / kRadToDeg, m.zone.inliers, std::max(m.zone.rms_mm, floor_sigma)));
+    const double fit = std::sqrt(arc_radius_variance(sweep / kRadToDeg, m.zone.inliers,
+                                                     std::max(m.zone.rms_mm, floor_sigma)));
     const double scale = extent_mm > 0.0 ? st.calibration_length_mm / extent_mm : 0.0;
     const double thermal = st.expansion_per_k * std::abs(st.temperature_delta_k) / std::sqrt(3.0);
     // The method's own error beyond the arc's noise (the wedge between the tangent lines, the
@@ -245,7 +247,7 @@ UncertaintyResult estimate_uncertainty(const SpringbackResult& sb, double extent
     const FlangeShape& shape = model.fit->shape;
     if (!model.fit->fitted || !shape.measured) continue;
     model.plane = plane_covariance(shape.local, shape.inlier);
-    if (shape.curled) model.curl = curl_covariance(shape.local, shape.inlier);
+    model.curl = curl_covariance(shape.local, shape.inlier);
     model.ok = model.plane.ok;
   }
   out.noise_mm = std::max(part_noise(flanges), st.scanner_sigma_mm);
@@ -258,7 +260,7 @@ UncertaintyResult estimate_uncertainty(const SpringbackResult& sb, double extent
   };
   for (const BendMeasurement& m : sb.bends)
     out.bends.push_back(
-        bend_budget(m, flange_of(m.flange_a), flange_of(m.flange_b), out.noise_mm, extent_mm, st));
+        bend_budget(m, flange_of(m.flange_a), flange_of(m.flange_b), extent_mm, st));
   for (const FlangeModel& f : flanges)
     out.flanges.push_back(flange_budget(f, out.noise_mm, extent_mm, st));
   return out;
@@ -279,7 +281,8 @@ void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb) {
     FlangeFit& flange = sb.flanges[f];
     if (!flange.shape.measured) continue;
     flange.shape.flatness_uncertainty_mm = k * u.flanges[f].flatness_mm;
-    if (flange.shape.curled) flange.shape.curl_radius_uncertainty_mm = k * u.flanges[f].curl_radius_mm;
+    if (flange.shape.curled)
+      flange.shape.curl_radius_uncertainty_mm = k * u.flanges[f].curl_radius_mm;
     for (EdgeDeviation& e : flange.trim_edges)
       if (e.measured) e.uncertainty_mm = k * u.flanges[f].edge_mm;
   }

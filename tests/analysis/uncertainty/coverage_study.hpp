@@ -75,10 +75,14 @@ enum class ProfileFamily { kClean, kNoisy, kCurled, kShortFlange };
 
 inline const char* family_name(ProfileFamily f) {
   switch (f) {
-    case ProfileFamily::kClean: return "profile sigma 0.02";
-    case ProfileFamily::kNoisy: return "profile sigma 0.05 + 2 % outliers";
-    case ProfileFamily::kCurled: return "profile, curled wall";
-    case ProfileFamily::kShortFlange: return "profile, short flange";
+    case ProfileFamily::kClean:
+      return "profile sigma 0.02";
+    case ProfileFamily::kNoisy:
+      return "profile sigma 0.05 + 2 % outliers";
+    case ProfileFamily::kCurled:
+      return "profile, curled wall";
+    case ProfileFamily::kShortFlange:
+      return "profile, short flange";
   }
   return "?";
 }
