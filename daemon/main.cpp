@@ -188,7 +188,9 @@ springscan::analysis::Expected<std::unique_ptr<springscan::daemon::PageServer>> 
       PageServer::start(settings.http, station.store(), settings.station.runner.station_name, log);
   if (!page) return page.error();
   PageFeed& feed = (*page)->feed();
-  station.watch_status([&feed](const MachineStatus& status) { feed.on_status(status); });
+  station.watch_status([&feed](const MachineStatus& status, bool calibration_drift) {
+    feed.on_status(status, calibration_drift);
+  });
   log.info("operator page on http://" + settings.http.address + ":" +
            std::to_string((*page)->port()) + "/");
   sd_notify(0, ("HTTP_PORT=" + std::to_string((*page)->port())).c_str());

@@ -20,9 +20,9 @@ PageFeed::~PageFeed() {
   if (thread_.joinable()) thread_.join();
 }
 
-void PageFeed::on_status(const MachineStatus& s) {
-  const PageStatus next{s.state, s.error_code,     s.error_detail,
-                        s.ready, s.scanner_online, s.plc_comm_lost};
+void PageFeed::on_status(const MachineStatus& s, bool calibration_drift) {
+  const PageStatus next{s.state,          s.error_code,    s.error_detail,   s.ready,
+                        s.scanner_online, s.plc_comm_lost, calibration_drift};
   std::lock_guard lock(mutex_);
   if (next == status_) return;
   status_ = next;

@@ -65,7 +65,7 @@ class PageFeed {
   PageFeed& operator=(const PageFeed&) = delete;
 
   /// Called by the event loop after every update. Never blocks on I/O.
-  void on_status(const MachineStatus& status);
+  void on_status(const MachineStatus& status, bool calibration_drift = false);
   /// The current snapshot.
   Snapshot current() const;
   /// Waits until a snapshot newer than `seen` exists, `timeout` passed or stop() was called;

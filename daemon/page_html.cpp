@@ -91,6 +91,7 @@ function renderState(s) {
   const flags = [];
   if (!s.scanner_online) flags.push('scanner offline');
   if (s.plc_comm_lost) flags.push('PLC communication lost');
+  if (s.calibration_drift) flags.push('CALIBRATION DRIFT: the check part is beyond its references, recalibrate the heads');
   if (!s.ready && s.state === 'idle') flags.push('not ready');
   $('flags').replaceChildren(...flags.map((f) => {
     const span = document.createElement('span'); span.textContent = f; return span; }));

@@ -122,6 +122,7 @@ void write_status(JsonWriter& w, const PageView& view) {
   w.field("ready", s.ready);
   w.field("scanner_online", s.scanner_online);
   w.field("plc_comm_lost", s.plc_comm_lost);
+  w.field("calibration_drift", s.calibration_drift);
   w.field("error_code", static_cast<std::uint64_t>(s.error_code));
   w.field("error_detail", static_cast<std::uint64_t>(s.error_detail));
   std::string fault = fault_text(s.error_code, s.error_detail);

@@ -30,6 +30,7 @@ struct PageStatus {
   bool ready = false;
   bool scanner_online = false;
   bool plc_comm_lost = false;
+  bool calibration_drift = false;  ///< the check part's latch (CALIBRATION_DRIFT)
   bool operator==(const PageStatus&) const = default;
 };
 

@@ -226,7 +226,7 @@ void Station::update_machine(Clock::time_point now) {
   live_.scan_progress_pct = machine_.status().busy ? runner_->progress_pct() : 0;
   image_.publish_status(machine_.status(), live_);
   image_.refresh_window();
-  if (watch_status_) watch_status_(machine_.status());
+  if (watch_status_) watch_status_(machine_.status(), live_.calibration_drift);
   const std::string text = status_text();
   if (text != last_status_text_) {
     notify("STATUS=" + text);

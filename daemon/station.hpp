@@ -33,7 +33,8 @@ struct StationSettings {
 using NotifyFn = std::function<void(const std::string& message)>;
 /// Receives the machine status after every update, on the event loop's thread: it must return
 /// at once (the operator page copies it, page_feed.hpp).
-using StatusFn = std::function<void(const MachineStatus& status)>;
+/// The machine's status and CALIBRATION_DRIFT (the check part's latch, not the machine's).
+using StatusFn = std::function<void(const MachineStatus& status, bool calibration_drift)>;
 
 class Station {
  public:

@@ -195,6 +195,26 @@ TEST_F(PageServerTest, EventStreamPushesEveryChangeAndNewRecords) {
   EXPECT_NE(result.find("\"shift\":{"), std::string::npos);
 }
 
+// CALIBRATION_DRIFT (the check part's latch) reaches the page as a flag of the status, and
+// leaves it when a check part passes again.
+TEST_F(PageServerTest, CalibrationDriftIsShownWhileLatched) {
+  start();
+  EventStream stream(server_->port());
+  ASSERT_TRUE(stream.ok());
+  EXPECT_NE(stream.next_data().find("\"calibration_drift\":false"), std::string::npos);
+  MachineStatus status;
+  status.scanner_online = true;
+  for (const bool drift : {true, false}) {
+    server_->feed().on_status(status, drift);
+    const std::string wanted = std::string("\"calibration_drift\":") + (drift ? "true" : "false");
+    std::string seen;
+    while (seen.find(wanted) == std::string::npos && !(seen = stream.next_data()).empty()) {
+    }
+    EXPECT_NE(seen.find(wanted), std::string::npos) << seen;
+    status.ready = !status.ready;  // a second change, so that the stream has news each time
+  }
+}
+
 TEST_F(PageServerTest, APageThatNeverReadsIsDroppedAndBlocksNobody) {
   // The last result's reasons go into every snapshot: a long one makes each ~100 KB, so the
   // stalled page's socket buffers fill after a few dozen changes.
