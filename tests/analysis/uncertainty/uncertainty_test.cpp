@@ -9,8 +9,8 @@
 #include <gtest/gtest.h>
 
 #include "analysis/uncertainty/fit_covariance.hpp"
-#include "tests/analysis/under_sanitizer.hpp"
 #include "tests/analysis/uncertainty/coverage_study.hpp"
+#include "tests/analysis/under_sanitizer.hpp"
 
 namespace springscan::analysis {
 namespace {
