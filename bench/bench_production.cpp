@@ -13,6 +13,7 @@
 #include "analysis/cad/model.hpp"
 #include "analysis/deviation/deviation.hpp"
 #include "analysis/inspection/pipeline.hpp"
+#include "analysis/uncertainty/frame_uncertainty.hpp"
 #include "bench/inspection_loop.hpp"
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/produced_part.hpp"
@@ -144,6 +145,33 @@ BENCHMARK(BM_DeviationSidePanel1M)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MeasureProcessCPUTime();
+
+// The uncertainty stage alone (docs/uncertainty.md) on the same scan in its true pose: the
+// flanges' covariances and every bend's budget from the springback stage's result, and the result
+// frame's from the reduced scan's pairs (as the pipeline gives it, 1 point in 20 here). Its share
+// of BM_InspectionSidePanel1M's total is the stage's cost (issue 41: at most 5 %).
+void BM_UncertaintySidePanel1M(benchmark::State& state) {
+  const Data& d = data();
+  if (!d.error.empty()) {
+    state.SkipWithError(d.error.c_str());
+    return;
+  }
+  const PointCloud in_cad = transformed(d.scan, scan_pose().inverse());
+  const auto springback = measure_springback(d.model, in_cad);
+  if (!springback) {
+    state.SkipWithError(springback.message().c_str());
+    return;
+  }
+  std::vector<Vec3> fit_points;
+  for (std::size_t i = 0; i < in_cad.size(); i += 20) fit_points.push_back(in_cad.points[i]);
+  const KdTree tree(d.model.samples.points);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(estimate_uncertainty(*springback, 500.0));
+    const FrameUncertainty frame = frame_uncertainty(fit_points, tree, d.model.samples.normals);
+    state.counters["frame_U_mm"] = frame.translation_mm;
+  }
+}
+BENCHMARK(BM_UncertaintySidePanel1M)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The simulated laser scanner (simulators/parts/laser_scan.hpp) on the side panel: 200k points
 // of one pass, noise 0.02 mm (was a timed unit test, LaserScan.SidePanelPointCount: timing

@@ -28,6 +28,7 @@
 #include "analysis/registration/facing.hpp"
 #include "analysis/registration/global_fit.hpp"
 #include "analysis/registration/orientation_settle.hpp"
+#include "analysis/uncertainty/frame_uncertainty.hpp"
 #include "analysis/uncertainty/uncertainty.hpp"
 
 namespace springscan::analysis {
@@ -503,6 +504,12 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   const auto T_cad_scan =
       result_frame(scan, fit->T_cad_scan, model, config->alignment, report.mutable_alignment());
   if (!T_cad_scan) return T_cad_scan.error();
+  // The result frame's U (k = 2) from the fit points' pairs (docs/uncertainty.md).
+  const FrameUncertainty frame_u =
+      frame_uncertainty(transformed(reduced->scan_for_fit, *T_cad_scan).points, model_tree,
+                        model.samples.normals, config->uncertainty);
+  report.mutable_alignment()->set_uncertainty_rotation_deg(frame_u.rotation_deg);
+  report.mutable_alignment()->set_uncertainty_translation_mm(frame_u.translation_mm);
   timings.set_global_fit(ms_since(t));
 
   t = Clock::now();

@@ -14,8 +14,8 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 // Where a curled flange's end tangent is taken, to about this (standard, mm): the calibration
-// study's curled walls (docs/uncertainty.md) show end-tangent errors of 0.14-0.25 mm over R.
-constexpr double kTangentPointMm = 0.2;
+// study's curled walls (docs/uncertainty.md) show end-tangent errors of 0.05-0.25 mm over R.
+constexpr double kTangentPointMm = 0.1;
 
 // One flange's fits as the uncertainty sees them.
 struct FlangeModel {
@@ -86,8 +86,8 @@ Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point,
   // relative). Not against other flanges' noise: a laser's noise along its beam differs from
   // flange to flange with the view. Correlated over the flange, its error does not shrink with
   // the point count. A residual of rms r over a spread of rms S turns the end from the plane by
-  // up to 3.9 r / S (a parabola); uniform within that: u = 3.9 / sqrt(3) r / S.
-  constexpr double kBowFactor = 2.25;
+  // up to 3.9 r / S (a parabola); the study's curled walls turn by up to 1.1x that: u = 2.75 r / S.
+  constexpr double kBowFactor = 2.75;
   const double spread = f.plane.spread_mm(w);
   double systematic = 0.0;
   if (!curl && f.curl.ok) {

@@ -33,6 +33,9 @@ struct UncertaintySettings {
   double temperature_delta_k = 0.0;    ///< the part's temperature off 20 degC, uncorrected (K)
   double expansion_per_k = 11.5e-6;    ///< the part's linear expansion coefficient (steel)
   double coverage_factor = 2.0;        ///< k of U = k u
+  /// A direction of the result frame the surface leaves free (an extrusion's length) is fixed
+  /// by the part's ends (registration/boundary) to about this (standard, mm).
+  double free_direction_mm = 0.5;
 };
 
 /// The standard uncertainties of one bend and how they came about (degrees, mm).

@@ -191,6 +191,9 @@ inline void run_production_case(const std::string& part, double noise_mm, bool o
   char family[96];
   std::snprintf(family, sizeof family, "production, sigma %.2f%s%s", noise_mm,
                 sc.outliers > 0 ? " + 2 % outliers" : "", one_sided ? ", one-sided view" : "");
+  // The result frame: its largest move against the true frame (field_truth.hpp), a magnitude.
+  out.push_back({"frame translation", family, run.frame_error_mm,
+                 run.report.alignment().uncertainty_translation_mm()});
   for (const parts::BendTruth& truth : run.bends) {
     if (truth.hem) continue;
     for (const v1::Bend& b : run.report.bends())

@@ -73,7 +73,7 @@ TEST(Uncertainty, StationTermsAddByRootSumOfSquares) {
 TEST(Uncertainty, CoversTheTruthOfProfilesHonestly) {
   // Seeds of this test only (never accuracy_sweep's held-out ones).
   std::mt19937_64 rng(770077);
-  const int per_family = kUnderSanitizer ? 1 : 8;
+  const int per_family = kUnderSanitizer ? 1 : 6;
   std::vector<testing::CoverageSample> samples;
   using testing::ProfileFamily;
   for (ProfileFamily f : {ProfileFamily::kClean, ProfileFamily::kNoisy, ProfileFamily::kCurled,

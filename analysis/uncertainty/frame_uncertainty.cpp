@@ -1,0 +1,111 @@
+#include "analysis/uncertainty/frame_uncertainty.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace springscan::analysis {
+namespace {
+
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+// The largest rms move, over the corners of [lo, hi], of the motion with covariance `cov`
+// (rotation about `c` first, then translation).
+double largest_move(const Mat6& cov, const Vec3& c, const Vec3& lo, const Vec3& hi) {
+  double worst = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vec3 x((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
+                 (corner & 4) ? hi.z() : lo.z());
+    double var = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const Vec3 e = Vec3::Unit(axis);
+      Vec6 g;
+      g << (x - c).cross(e), e;  // e . (w x (x - c) + t)
+      var += g.dot(cov * g);
+    }
+    worst = std::max(worst, std::sqrt(var));
+  }
+  return worst;
+}
+
+}  // namespace
+
+FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree& tree,
+                                   const std::vector<Vec3>& normals, const UncertaintySettings& st,
+                                   double pair_distance_mm) {
+  FrameUncertainty out;
+  if (points.empty() || normals.size() != tree.size()) return out;
+  Vec3 c = Vec3::Zero(), lo = points.front(), hi = points.front();
+  for (const Vec3& p : points) c += p, lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  c /= static_cast<double>(points.size());
+  // The pairs' rows and residuals.
+  std::vector<Vec6> rows;
+  std::vector<double> residuals;
+  rows.reserve(points.size());
+  residuals.reserve(points.size());
+  for (const Vec3& p : points) {
+    const auto nn = tree.nearest(p, pair_distance_mm);
+    if (!nn) continue;
+    const Vec3& n = normals[nn->index];
+    Vec6 j;
+    j << (p - c).cross(n), n;
+    rows.push_back(j);
+    residuals.push_back(n.dot(p - tree.points()[nn->index]));
+  }
+  out.pairs = rows.size();
+  if (out.pairs < 6) return out;
+  // A robust scale (1.4826 MAD): the pairs include springback's own deviations and outliers.
+  std::vector<double> magnitude(residuals.size());
+  for (std::size_t i = 0; i < residuals.size(); ++i) magnitude[i] = std::abs(residuals[i]);
+  std::nth_element(magnitude.begin(), magnitude.begin() + static_cast<long>(magnitude.size() / 2),
+                   magnitude.end());
+  out.sigma_mm = std::max(1.4826 * magnitude[magnitude.size() / 2], st.scanner_sigma_mm);
+  // The part's departure from the CAD beyond the noise (springback, curl: the pairs' rms with the
+  // farthest 5 % left out, less the noise): the best fit of a deformed part moves with what of
+  // it the scan sees and the fit keeps, by about that much (the method's error, u = d).
+  std::sort(magnitude.begin(), magnitude.end());
+  double sum2 = 0.0;
+  const std::size_t kept = std::max<std::size_t>(1, magnitude.size() * 95 / 100);
+  for (std::size_t i = 0; i < kept; ++i) sum2 += magnitude[i] * magnitude[i];
+  const double departure_mm =
+      std::sqrt(std::max(0.0, sum2 / static_cast<double>(kept) - out.sigma_mm * out.sigma_mm));
+  Mat6 normal = Mat6::Zero();
+  for (std::size_t i = 0; i < rows.size(); ++i)
+    if (std::abs(residuals[i]) <= 3.0 * out.sigma_mm)
+      normal += rows[i] * rows[i].transpose();
+  // Rotation scaled by the points' size, so that the eigenvalues compare.
+  const double radius = std::max(0.5 * (hi - lo).norm(), 1.0);
+  Vec6 scale;
+  scale << Vec3::Constant(radius), Vec3::Ones();
+  const Mat6 scaled = scale.cwiseInverse().asDiagonal() * normal * scale.cwiseInverse().asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(scaled);
+  const double largest = eig.eigenvalues()(5);
+  if (!(largest > 0.0)) return out;
+  // Determined directions: sigma^2 / eigenvalue; a free one (an extrusion's length) is fixed by
+  // the part's ends to about free_direction_mm.
+  Vec6 variance;
+  for (int k = 0; k < 6; ++k) {
+    const double value = eig.eigenvalues()(k);
+    variance(k) = value > 1e-6 * largest ? out.sigma_mm * out.sigma_mm / value
+                                         : st.free_direction_mm * st.free_direction_mm;
+  }
+  const Mat6 scaled_cov = eig.eigenvectors() * variance.asDiagonal() * eig.eigenvectors().transpose();
+  const Mat6 cov = scale.cwiseInverse().asDiagonal() * scaled_cov * scale.cwiseInverse().asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
+  const double k = st.coverage_factor;
+  const double rotation_deg = std::sqrt(std::max(0.0, rot.eigenvalues()(2))) * 180.0 / std::numbers::pi;
+  const double departure_deg = departure_mm / radius * 180.0 / std::numbers::pi;
+  out.rotation_deg =
+      k * std::sqrt(rotation_deg * rotation_deg + departure_deg * departure_deg +
+                    st.calibration_angle_deg * st.calibration_angle_deg);
+  const double thermal =
+      st.expansion_per_k * std::abs(st.temperature_delta_k) * radius / std::sqrt(3.0);
+  out.translation_mm =
+      k * std::sqrt(std::pow(largest_move(cov, c, lo, hi), 2) + departure_mm * departure_mm +
+                    std::pow(st.calibration_length_mm, 2) + thermal * thermal);
+  return out;
+}
+
+}  // namespace springscan::analysis
