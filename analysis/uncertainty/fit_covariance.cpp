@@ -20,16 +20,13 @@ bool invert(const Eigen::Matrix<double, N, N>& normal, Eigen::Matrix<double, N, 
 
 }  // namespace
 
-PlaneCovariance plane_covariance(std::span<const Vec3> local, std::span<const std::uint8_t> inlier,
-                                 const std::function<bool(const Vec3&)>& keep,
-                                 const std::function<double(const Vec3&)>& offset_h) {
+PlaneCovariance plane_covariance(std::span<const Vec3> local,
+                                 std::span<const std::uint8_t> inlier) {
   PlaneCovariance out;
   // Centred on the points' own mean in (s, t), so that the normal matrix is well conditioned.
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   Eigen::Matrix2d second = Eigen::Matrix2d::Zero();
-  const auto used = [&](std::size_t i) {
-    return (inlier.empty() || inlier[i]) && (!keep || keep(local[i]));
-  };
+  const auto used = [&](std::size_t i) { return inlier.empty() || inlier[i]; };
   for (std::size_t i = 0; i < local.size(); ++i) {
     if (!used(i)) continue;
     const Eigen::Vector2d st(local[i].x(), local[i].y());
@@ -47,7 +44,7 @@ PlaneCovariance plane_covariance(std::span<const Vec3> local, std::span<const st
   if (!invert<3>(normal, out.inverse_normal)) return out;
   // The fit (centred coordinates), then its residuals.
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  const auto height = [&](const Vec3& q) { return q.z() - (offset_h ? offset_h(q) : 0.0); };
+  const auto height = [](const Vec3& q) { return q.z(); };
   for (std::size_t i = 0; i < local.size(); ++i) {
     if (!used(i)) continue;
     const Eigen::Vector3d x(1.0, local[i].x() - mean.x(), local[i].y() - mean.y());

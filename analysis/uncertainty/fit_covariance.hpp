@@ -9,7 +9,6 @@
 
 #include <Eigen/Core>
 #include <cstdint>
-#include <functional>
 #include <span>
 
 #include "analysis/core/point_cloud.hpp"
@@ -32,11 +31,8 @@ struct PlaneCovariance {
   double spread_mm(const Eigen::Vector2d& w) const { return std::sqrt(w.dot(scatter * w)); }
 };
 
-/// The plane of the inliers of `local` (flags in `inlier`, same order) that `keep` accepts (all
-/// when empty). `offset_h`: subtracted from each h first (a held curl term), may be empty.
-PlaneCovariance plane_covariance(std::span<const Vec3> local, std::span<const std::uint8_t> inlier,
-                                 const std::function<bool(const Vec3&)>& keep = {},
-                                 const std::function<double(const Vec3&)>& offset_h = {});
+/// The plane of the inliers of `local` (flags in `inlier`, same order; all when empty).
+PlaneCovariance plane_covariance(std::span<const Vec3> local, std::span<const std::uint8_t> inlier);
 
 /// The curl model A (s^2 + h^2) + B s + G t s + C + E t = h over the inliers.
 struct CurlCovariance {

@@ -45,7 +45,12 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   std::vector<double> residuals;
   rows.reserve(points.size());
   residuals.reserve(points.size());
-  for (const Vec3& p : points) {
+  // At most kMaxPairs pairs, evenly through the points: J^T J of all of them is `stride` x that
+  // of every stride-th (the covariance's scale is set back below).
+  constexpr std::size_t kMaxPairs = 10000;
+  const std::size_t stride = std::max<std::size_t>(1, points.size() / kMaxPairs);
+  for (std::size_t i = 0; i < points.size(); i += stride) {
+    const Vec3& p = points[i];
     const auto nn = tree.nearest(p, pair_distance_mm);
     if (!nn) continue;
     const Vec3& n = normals[nn->index];
@@ -73,13 +78,14 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
       std::sqrt(std::max(0.0, sum2 / static_cast<double>(kept) - out.sigma_mm * out.sigma_mm));
   Mat6 normal = Mat6::Zero();
   for (std::size_t i = 0; i < rows.size(); ++i)
-    if (std::abs(residuals[i]) <= 3.0 * out.sigma_mm)
-      normal += rows[i] * rows[i].transpose();
+    if (std::abs(residuals[i]) <= 3.0 * out.sigma_mm) normal += rows[i] * rows[i].transpose();
+  normal *= static_cast<double>(stride);
   // Rotation scaled by the points' size, so that the eigenvalues compare.
   const double radius = std::max(0.5 * (hi - lo).norm(), 1.0);
   Vec6 scale;
   scale << Vec3::Constant(radius), Vec3::Ones();
-  const Mat6 scaled = scale.cwiseInverse().asDiagonal() * normal * scale.cwiseInverse().asDiagonal();
+  const Mat6 scaled =
+      scale.cwiseInverse().asDiagonal() * normal * scale.cwiseInverse().asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Mat6> eig(scaled);
   const double largest = eig.eigenvalues()(5);
   if (!(largest > 0.0)) return out;
@@ -91,15 +97,17 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
     variance(k) = value > 1e-6 * largest ? out.sigma_mm * out.sigma_mm / value
                                          : st.free_direction_mm * st.free_direction_mm;
   }
-  const Mat6 scaled_cov = eig.eigenvectors() * variance.asDiagonal() * eig.eigenvectors().transpose();
-  const Mat6 cov = scale.cwiseInverse().asDiagonal() * scaled_cov * scale.cwiseInverse().asDiagonal();
+  const Mat6 scaled_cov =
+      eig.eigenvectors() * variance.asDiagonal() * eig.eigenvectors().transpose();
+  const Mat6 cov =
+      scale.cwiseInverse().asDiagonal() * scaled_cov * scale.cwiseInverse().asDiagonal();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
   const double k = st.coverage_factor;
-  const double rotation_deg = std::sqrt(std::max(0.0, rot.eigenvalues()(2))) * 180.0 / std::numbers::pi;
+  const double rotation_deg =
+      std::sqrt(std::max(0.0, rot.eigenvalues()(2))) * 180.0 / std::numbers::pi;
   const double departure_deg = departure_mm / radius * 180.0 / std::numbers::pi;
-  out.rotation_deg =
-      k * std::sqrt(rotation_deg * rotation_deg + departure_deg * departure_deg +
-                    st.calibration_angle_deg * st.calibration_angle_deg);
+  out.rotation_deg = k * std::sqrt(rotation_deg * rotation_deg + departure_deg * departure_deg +
+                                   st.calibration_angle_deg * st.calibration_angle_deg);
   const double thermal =
       st.expansion_per_k * std::abs(st.temperature_delta_k) * radius / std::sqrt(3.0);
   out.translation_mm =

@@ -117,14 +117,16 @@ double strip_tilt_var(const FlangeModel& f, const BendMeasurement& m, double pos
   const Vec3& a = m.axis_direction;
   const Vec3 along(fr.u.dot(a), fr.d.dot(a), fr.n.dot(a));
   const double offset = (fr.origin - m.axis_point).dot(a) - position;
-  const auto keep = [&](const Vec3& q) { return std::abs(offset + along.dot(q)) <= 0.5 * window; };
   // A curled flange's strips hold its curvature (StripFit): the curl term comes off first, and
   // the curvature's own error is added below.
   const double A = shape.curled ? shape.surface.A : 0.0;
-  const auto held = [A](const Vec3& q) { return A * (q.x() * q.x() + q.z() * q.z()); };
-  const PlaneCovariance strip =
-      plane_covariance(shape.local, shape.inlier, keep,
-                       A != 0.0 ? std::function<double(const Vec3&)>(held) : nullptr);
+  std::vector<Vec3> points;  // the strip's inliers, the held curl term off h
+  for (std::size_t j = 0; j < shape.local.size(); ++j) {
+    const Vec3& q = shape.local[j];
+    if (!shape.inlier[j] || !(std::abs(offset + along.dot(q)) <= 0.5 * window)) continue;
+    points.emplace_back(q.x(), q.y(), q.z() - A * (q.x() * q.x() + q.z() * q.z()));
+  }
+  const PlaneCovariance strip = plane_covariance(points, {});
   if (!strip.ok) return std::numeric_limits<double>::infinity();
   const Eigen::Vector2d w = across_in_frame(fr, a);
   double var = strip.slope_variance(w, std::max(strip.sigma_mm, floor_sigma));
