@@ -535,11 +535,11 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   t = Clock::now();
   // 6-7. Local best fits per flange and springback per bend (paper §4, automated).
   const auto springback = add_bend_table(model, out.deviation_cloud, *config, report);
-  // The surface statistic's U: the flanges' noise (else the fit's residual), the frame's U.
+  // The surface statistic's U: the flanges' noise (else the fit's residual), and how far a
+  // repeated scan moves the best fit the deviation is defined in.
   attach_deviation_uncertainty(springback ? part_noise_mm(*springback) : fit_rms_residual_mm,
-                               report.alignment().uncertainty_translation_mm(),
-                               part_extent_mm(out.deviation_cloud), config->uncertainty,
-                               deviation->statistics);
+                               frame_u.repeat_translation_mm, part_extent_mm(out.deviation_cloud),
+                               config->uncertainty, deviation->statistics);
   report.mutable_deviation()->set_uncertainty_mm(config->verdict.deviation_statistic ==
                                                          DeviationStatistic::kMax
                                                      ? deviation->statistics.max_uncertainty_mm

@@ -91,16 +91,19 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   if (!(largest > 0.0)) return out;
   // Determined directions: sigma^2 / eigenvalue; a free one (an extrusion's length) is fixed by
   // the part's ends to about free_direction_mm.
-  Vec6 variance;
+  Vec6 variance, determined = Vec6::Zero();
   for (int k = 0; k < 6; ++k) {
     const double value = eig.eigenvalues()(k);
-    variance(k) = value > 1e-6 * largest ? out.sigma_mm * out.sigma_mm / value
-                                         : st.free_direction_mm * st.free_direction_mm;
+    const bool fixed = value > 1e-6 * largest;
+    variance(k) =
+        fixed ? out.sigma_mm * out.sigma_mm / value : st.free_direction_mm * st.free_direction_mm;
+    if (fixed) determined(k) = variance(k);
   }
-  const Mat6 scaled_cov =
-      eig.eigenvectors() * variance.asDiagonal() * eig.eigenvectors().transpose();
-  const Mat6 cov =
-      scale.cwiseInverse().asDiagonal() * scaled_cov * scale.cwiseInverse().asDiagonal();
+  const auto unscaled = [&](const Vec6& v) -> Mat6 {
+    const Mat6 m = eig.eigenvectors() * v.asDiagonal() * eig.eigenvectors().transpose();
+    return scale.cwiseInverse().asDiagonal() * m * scale.cwiseInverse().asDiagonal();
+  };
+  const Mat6 cov = unscaled(variance);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
   const double k = st.coverage_factor;
   const double rotation_deg =
@@ -110,9 +113,13 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
                                    st.calibration_angle_deg * st.calibration_angle_deg);
   const double thermal =
       st.expansion_per_k * std::abs(st.temperature_delta_k) * radius / std::sqrt(3.0);
+  const double move = largest_move(cov, c, lo, hi);
+  const double station_mm = std::hypot(st.calibration_length_mm, thermal);
   out.translation_mm =
-      k * std::sqrt(std::pow(largest_move(cov, c, lo, hi), 2) + departure_mm * departure_mm +
-                    std::pow(st.calibration_length_mm, 2) + thermal * thermal);
+      k * std::sqrt(move * move + departure_mm * departure_mm + station_mm * station_mm);
+  // A slide along a free direction leaves the surface where it is: not in a deviation's U.
+  out.repeat_translation_mm =
+      k * std::hypot(largest_move(unscaled(determined), c, lo, hi), station_mm);
   return out;
 }
 

@@ -18,7 +18,11 @@ namespace springscan::analysis {
 struct FrameUncertainty {
   double rotation_deg = 0.0;    ///< expanded: the largest turn (k sigma of the worst axis)
   double translation_mm = 0.0;  ///< expanded: the largest move of a corner of the points' box
-  double sigma_mm = 0.0;        ///< the pairs' robust residual scale
+  /// Expanded, as translation_mm without the part's departure from the CAD and without the free
+  /// directions (a slide along them leaves the surface in place): how far a repeated scan moves
+  /// this scan's best fit, the frame a deviation statistic is defined in.
+  double repeat_translation_mm = 0.0;
+  double sigma_mm = 0.0;  ///< the pairs' robust residual scale
   std::size_t pairs = 0;
 };
 
