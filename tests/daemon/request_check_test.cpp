@@ -81,7 +81,11 @@ TEST(RequestCheck, IllegalDataAddress) {
   // Writes to read-only areas: the FC03 mirrors and past the PLC's registers.
   EXPECT_EQ(verdict(adu({6, 0, regs::kHrLiveMirror, 0, 1})), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
   EXPECT_EQ(verdict(adu({6, 0, regs::kIrResultSeq, 0, 1})), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
-  EXPECT_EQ(verdict(adu({16, 0, 4, 0, 2, 4, 0, 0, 0, 0})), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  // Two registers from the last writable one (PART_SERIAL's low word) reach past it.
+  constexpr auto last = static_cast<std::uint8_t>(regs::kHrWritableCount - 1);
+  EXPECT_EQ(verdict(adu({16, 0, last, 0, 2, 4, 0, 0, 0, 0})),
+            MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
+  EXPECT_EQ(verdict(adu({16, 0, regs::kHrPartSerial, 0, 2, 4, 0, 1, 0, 2})), 0);  // PART_SERIAL
   EXPECT_EQ(verdict(adu({5, 0, 4, 0xFF, 0})), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
   EXPECT_EQ(verdict(adu({15, 0, 2, 0, 3, 1, 7})), MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS);
 }
