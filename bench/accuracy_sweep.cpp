@@ -16,11 +16,15 @@
 // crash, a bend off by more than 1 deg, or an ambiguous part passed: CI runs it at a seed derived
 // from the commit to report, without blocking, while accuracy is being fixed (docs/springback.md
 // keeps each landing's summary).
+#include <google/protobuf/text_format.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <vector>
@@ -35,6 +39,8 @@ struct SweepOptions {
   std::uint64_t seed = 1;
   int cases = 24;
   std::int64_t points = 200'000;
+  int only = -1;                  ///< run this case alone (the draws before it are still made)
+  v1::AnalysisSettings settings;  ///< the analysis settings (--settings FILE.textproto)
 };
 
 struct Summary {
@@ -125,7 +131,16 @@ void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summ
   sc.missing = noisy ? 0.10 : 0.0;
   sc.points = options.points;
   sc.seed = rng() % 100000;
-  const testing::FieldRun run = testing::run_field_case(cad, sc);
+  if (options.only >= 0 && index != options.only) return;
+  if (options.only >= 0) {  // the draw in full, to be rebuilt as a test case
+    std::printf("draw: seed %llu, springback", static_cast<unsigned long long>(sc.seed));
+    for (double d : sc.springback_deg) std::printf(" %.17g", d);
+    std::printf(", pose");
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) std::printf(" %.17g", sc.pose.matrix()(r, c));
+    std::printf("\n");
+  }
+  const testing::FieldRun run = testing::run_field_case(cad, sc, options.settings);
   if (run.bends.empty() && run.report.bends_size() == 0) {
     // The simulator could not produce this draw (run_field_case printed why): no part to judge.
     std::printf("case %d: %s | not produced by the simulator, skipped\n", index,
@@ -144,10 +159,15 @@ void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summ
       sc.scanner_normals ? "normals" : "points only", run.frame_error_mm, field.p95_full,
       field.max_full, field.vectors, ambiguous ? " | AMBIGUOUS" : "");
   ++sum.cases;
+  if (options.only >= 0)  // one case looked at closely: what the station said about it
+    for (const std::string& warning : report.warnings()) std::printf("  %s\n", warning.c_str());
   if (ambiguous) {
     // The station says it cannot tell the part from its turned copy: its bend table may be the
     // mirror image's, and the part must fail. Counted apart; a pass would be a wrong answer.
     ++sum.ambiguous;
+    for (const std::string& warning : report.warnings())
+      if (options.only < 0 && warning.starts_with("global fit:"))
+        std::printf("  %s\n", warning.c_str());
     if (report.verdict().pass()) {
       ++sum.ambiguous_passed;
       std::printf("  an ambiguous fit PASSED the part\n");
@@ -223,8 +243,20 @@ int main(int argc, char** argv) {
       options.cases = std::atoi(argv[++i]);
     } else if (arg == "--points" && has_value) {
       options.points = std::atoll(argv[++i]);
+    } else if (arg == "--case" && has_value) {
+      options.only = std::atoi(argv[++i]);
+    } else if (arg == "--settings" && has_value) {
+      std::ifstream in(argv[++i]);
+      const std::string text((std::istreambuf_iterator<char>(in)),
+                             std::istreambuf_iterator<char>());
+      if (!in || !google::protobuf::TextFormat::ParseFromString(text, &options.settings)) {
+        std::fprintf(stderr, "accuracy_sweep: cannot read %s as AnalysisSettings\n", argv[i]);
+        return 2;
+      }
     } else {
-      std::fprintf(stderr, "usage: accuracy_sweep [--seed S] [--cases N] [--points P]\n");
+      std::fprintf(stderr,
+                   "usage: accuracy_sweep [--seed S] [--cases N] [--points P] [--case K] "
+                   "[--settings FILE]\n");
       return 2;
     }
   }

@@ -62,14 +62,22 @@ struct OrientationSettings {
   double decisive_far_ratio = 3.0;   ///< ... and at least this many times as far, tells
                                      ///< against it, by that difference up to:
   double decisive_cap_mm = 2.0;
-  std::size_t min_decisive_points = 10;  ///< an orientation wins when this many points tell
-  double decisive_ratio = 0.25;          ///< against each other one and the evidence against it
-                                         ///< is at most this share of theirs
-  double distinct_pose_deg = 5.0;        ///< orientations farther apart than this are distinct
-  double equivalent_rms_mm = 0.02;       ///< the model moved by the motion between two finalists
-                                         ///< (centroid kept, refined onto itself) fits itself
-                                         ///< within this robust rms: a symmetric model, the two
-                                         ///< orientations are the same answer
+  /// ... when another such point lies within this distance (mm): a notch or a hole the other
+  /// orientation lacks shows as a patch of them, an outlier as a lone one. At sigma 0.05 mm with
+  /// 2 % outliers, lone outliers that lay 3 times as far off one orientation as off the other
+  /// outweighed a side panel's few notch points (4 against 8), leaving a good panel ambiguous.
+  double decisive_company_mm = 2.0;
+  /// An orientation wins when this many points tell against each other one (4: with the
+  /// company rule, noise and outliers hardly tell, and 7-8 notch points are what some noisy
+  /// side panel views show) ...
+  std::size_t min_decisive_points = 4;
+  double decisive_ratio = 0.25;     ///< ... and the evidence against it is at most this share of
+                                    ///< theirs
+  double distinct_pose_deg = 5.0;   ///< orientations farther apart than this are distinct
+  double equivalent_rms_mm = 0.02;  ///< the model moved by the motion between two finalists
+                                    ///< (centroid kept, refined onto itself) fits itself
+                                    ///< within this robust rms: a symmetric model, the two
+                                    ///< orientations are the same answer
 };
 
 struct OrientationCandidate {

@@ -98,14 +98,40 @@ double robust_sigma(std::vector<double> d) {
   return 1.4826 * *mid;
 }
 
-DecisiveCounts count_decisive(const std::vector<Settled>& all, const OrientationSettings& s) {
+// The points among `candidates` (indices into `points`) with another of them within
+// `company_mm`: a notch or hole shows as a patch of points that one orientation leaves off the
+// surface, an outlier as a lone one.
+std::vector<std::size_t> in_company(const std::vector<std::size_t>& candidates,
+                                    const std::vector<Vec3>& points, double company_mm) {
+  if (!(company_mm > 0.0)) return candidates;
+  std::vector<Vec3> at;
+  at.reserve(candidates.size());
+  for (std::size_t i : candidates) at.push_back(points[i]);
+  const KdTree tree(at);
+  std::vector<Neighbor> near;
+  std::vector<std::size_t> kept;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    tree.radius(at[k], company_mm, near);
+    if (near.size() > 1) kept.push_back(candidates[k]);
+  }
+  return kept;
+}
+
+// `points`: the decisive points (one per entry of every Settled::decisive_mm).
+DecisiveCounts count_decisive(const std::vector<Settled>& all, const OrientationSettings& s,
+                              const std::vector<Vec3>& points) {
   const std::size_t n = all.size();
   DecisiveCounts out{std::vector<std::vector<std::size_t>>(n, std::vector<std::size_t>(n, 0)),
                      std::vector<std::vector<double>>(n, std::vector<double>(n, 0.0)), 0.0};
-  const auto tell = [&](std::size_t a, std::size_t b, double d_a, double d_b, double margin) {
-    if (!(d_b - d_a > margin && d_b > s.decisive_far_ratio * d_a)) return;
-    ++out.against[a][b];
-    out.excess_mm[a][b] += std::min(d_b - d_a, s.decisive_cap_mm);
+  const auto tells = [&](double d_a, double d_b, double margin) {
+    return d_b - d_a > margin && d_b > s.decisive_far_ratio * d_a;
+  };
+  const auto add = [&](std::size_t a, std::size_t b, const std::vector<std::size_t>& told) {
+    const std::vector<double>&da = all[a].decisive_mm, &db = all[b].decisive_mm;
+    for (std::size_t i : in_company(told, points, s.decisive_company_mm)) {
+      ++out.against[a][b];
+      out.excess_mm[a][b] += std::min(db[i] - da[i], s.decisive_cap_mm);
+    }
   };
   for (std::size_t a = 0; a < n; ++a)
     for (std::size_t b = a + 1; b < n; ++b) {
@@ -115,10 +141,13 @@ DecisiveCounts count_decisive(const std::vector<Settled>& all, const Orientation
       const double margin =
           std::max(s.decisive_margin_mm, s.decisive_sigmas * robust_sigma(std::move(diff)));
       out.margin_mm = std::max(out.margin_mm, margin);
+      std::vector<std::size_t> against_b, against_a;
       for (std::size_t i = 0; i < da.size(); ++i) {
-        tell(a, b, da[i], db[i], margin);
-        tell(b, a, db[i], da[i], margin);
+        if (tells(da[i], db[i], margin)) against_b.push_back(i);
+        if (tells(db[i], da[i], margin)) against_a.push_back(i);
       }
+      add(a, b, against_b);
+      add(b, a, against_a);
     }
   return out;
 }
@@ -215,8 +244,9 @@ double rank(const std::vector<Settled>& all, double Settled::*score, std::size_t
 // whichever is kept: with springback both errors are mostly the flanges' turn, and their order
 // a matter of where each fit spread it). Sets choice.ambiguity and decided_by; returns the
 // winner's index in `all`.
-std::size_t decide(const std::vector<Settled>& all, const GlobalFitSettings& settings,
-                   OrientationChoice& choice, std::vector<std::string>& warnings) {
+std::size_t decide(const std::vector<Settled>& all, const std::vector<Vec3>& decisive,
+                   const GlobalFitSettings& settings, OrientationChoice& choice,
+                   std::vector<std::string>& warnings) {
   const OrientationSettings& os = settings.orientation;
   if (!os.symmetry_features.empty()) {
     if (const auto by_features = feature_winner(all, os)) {
@@ -235,7 +265,7 @@ std::size_t decide(const std::vector<Settled>& all, const GlobalFitSettings& set
     text << "): the whole part decides";
     warnings.push_back(text.str());
   }
-  const DecisiveCounts counts = count_decisive(all, os);
+  const DecisiveCounts counts = count_decisive(all, os, decisive);
   if (const auto by_points = decisive_winner(counts, os)) {
     double worst = 0.0;
     for (std::size_t k = 0; k < all.size(); ++k)
@@ -329,7 +359,7 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
   });
   for (const std::string& e : errors)
     if (!e.empty()) return fail("global fit: settling the orientation: " + e);
-  const std::size_t winner = decide(all, settings, choice, fit.warnings);
+  const std::size_t winner = decide(all, decisive, settings, choice, fit.warnings);
   for (const Settled& r : all) choice.candidates[r.candidate].score_mm2 = r.whole_mm2;
   const Settled& w = all[winner];
   if (winner > 0) {

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdio>
 #include <map>
 #include <ostream>
@@ -339,6 +340,70 @@ TEST_P(ProductionPart, PointsOnlyScanMeasuresEveryBend) {
   std::printf("%s points only: %d bends measured, worst springback error %.4f deg\n",
               part.name.c_str(), check.measured, check.worst);
   EXPECT_GE(check.measured, part.measurable_bends);
+}
+
+// Issue 32: two fresh draws of the side panel (bench/accuracy_sweep --seed 99 --case 13 and
+// --case 11; springback, pose and scan seed as drawn there) whose passes catch only a few points
+// of its notched wall, the one feature that tells it from its half turn. Points only; the first
+// at sigma 0.05 mm with 2 % outliers and 10 % missing, which the station reported ambiguous: the
+// decisive points counted lone outliers, which lie far off one orientation by chance, against
+// the notch's few points. A point now tells only with company (another within 2 mm), and 4
+// points suffice instead of 10. The second draw, decided before, guards that it stays decided.
+// The truth is the constructed pose: the half turn puts the panel some 800 mm off; the frame
+// error allowed is that of points-only scans of solids (about 1.1 mm here, issue 32's open
+// "poses under noise", docs/springback.md).
+struct SidePanelDraw {
+  std::uint64_t seed;
+  double noise_mm, outliers, missing;
+  std::vector<double> springback_deg;
+  std::array<double, 12> pose;  // row-major 3 x 4, scan from part
+};
+
+TEST(SidePanelOrientation, FewNotchPointsDecideUnderNoise) {
+  if (testing::kUnderSanitizer) GTEST_SKIP() << "accuracy test, run without sanitizers";
+  const std::vector<SidePanelDraw> draws = {
+      {35720,
+       0.05,
+       0.02,
+       0.10,
+       {1.5740969284193849, 2.2646302621035486, 2.9718486141487288, 0.39064425012374532,
+        2.3118760121696145, 0.38730563281310876, 2.3855630594924118, 2.5845086745065378,
+        2.4969222232083288, 2.0466729044119898, 0.49353667054571626, 0.38787612829522822,
+        2.8508041160913637, 2.8111561906103031, 1.1825492183352158, 1.3576187661373949},
+       {-0.84158931018638161, -0.25378100641101059, -0.47678363412036812, 230.94600932410447,
+        0.34763432626115909, -0.93010565496212871, -0.11854891738189506, 476.64064279151978,
+        -0.41337369072663588, -0.26551585902255259, 0.87098996574160115, 194.64416653434898}},
+      {5576,
+       0.02,
+       0.0,
+       0.0,
+       {0, 2.6044926160703255, 0.25475998909335373, 0, 2.768155719785804, 1.6970966131495531,
+        2.4561014719668659, 1.5051647829497106, 1.4233874845435808, 0.58260596767642836,
+        1.1254562472794158, 1.2459422730970851, 1.9162540277987379, 1.6613041754848901,
+        2.9346906687204513, 2.1532097013109213},
+       {0.54088619446461417, 0.84055752258860472, -0.03008614061814192, 481.05782151898336,
+        -0.76163680303220904, 0.47429809491447161, -0.44153221561668504, 352.88485428209106,
+        -0.35686342612330485, 0.2617333917944174, 0.89674083586916375, -101.07819869086819}}};
+  const auto& cad = parts::testing::loaded_part("openamr-MMP.00.00.00.003_Side_panel.step");
+  for (const SidePanelDraw& d : draws) {
+    FieldScenario sc;
+    sc.seed = d.seed;
+    sc.noise_mm = d.noise_mm;
+    sc.outliers = d.outliers;
+    sc.missing = d.missing;
+    sc.springback_deg = d.springback_deg;
+    sc.tilt_axis_deg = 45.0;
+    sc.scanner_normals = false;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)
+        sc.pose.matrix()(r, c) = d.pose[static_cast<std::size_t>(4 * r + c)];
+    const FieldRun run = testing::run_field_case(cad, sc);
+    std::printf("side panel draw %llu: ambiguous %d, result frame off by %.4f mm\n",
+                static_cast<unsigned long long>(d.seed), run.report.global_fit().ambiguous(),
+                run.frame_error_mm);
+    EXPECT_FALSE(run.report.global_fit().ambiguous()) << d.seed;
+    EXPECT_LT(run.frame_error_mm, 1.5) << d.seed;
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Openamr, ProductionPart, ::testing::ValuesIn(expectations()),
