@@ -405,7 +405,8 @@ bool samples_biased_at_bends(const PartModel& model, const KdTree& model_tree) {
 
 // Stage 4b: the result frame. With datums (registration/datum.hpp), the datum frame solved from
 // the datum features measured in the scan, the best fit kept beside it; without, the best fit.
-// A datum that cannot be measured fails the analysis (named), never falls back.
+// A datum that cannot be measured: the best fit's frame, the alignment marked not achieved (the
+// datum named and why), and the verdict fails (run_inspection).
 Expected<Transform> result_frame(const PointCloud& scan, const Transform& T_best,
                                  const PartModel& model, const DatumAlignmentSettings& settings,
                                  v1::Alignment* out) {
@@ -562,6 +563,13 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
        std::move(*coverage), fit_rms_residual_mm, fit->ambiguous, fit->orientation.ambiguity},
       config->verdict);
   to_proto(verdict, &report);
+  // No datum frame (a datum not measurable): the results are the best fit's, never a PASS.
+  if (!report.alignment().achieved()) {
+    report.mutable_verdict()->set_pass(false);
+    report.mutable_verdict()->set_decision(v1::Verdict::FAIL);
+    report.mutable_verdict()->add_reasons("alignment: " + report.alignment().failure() +
+                                          "; the results are in the best-fit frame");
+  }
 
   timings.set_total(ms_since(start));
   return out;

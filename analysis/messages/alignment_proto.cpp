@@ -80,6 +80,7 @@ Expected<DatumAlignmentSettings> from_proto(const v1::AlignmentSettings& m) {
     s.datums.push_back(std::move(*d));
   }
   if (m.has_search_mm()) s.search_mm = m.search_mm();
+  if (m.has_capture_mm()) s.capture_mm = m.capture_mm();
   if (m.has_band_mm()) s.band_mm = m.band_mm();
   if (m.has_min_points()) s.min_points = static_cast<std::size_t>(std::max(m.min_points(), 0));
   if (auto e = validate(s, "settings: alignment: ")) return *e;
@@ -102,6 +103,7 @@ void to_proto(const DatumAlignmentSettings& s, v1::AlignmentSettings* m) {
     dm.set_weight(d.weight);
   }
   m->set_search_mm(s.search_mm);
+  m->set_capture_mm(s.capture_mm);
   m->set_band_mm(s.band_mm);
   m->set_min_points(static_cast<int>(s.min_points));
 }
@@ -109,6 +111,16 @@ void to_proto(const DatumAlignmentSettings& s, v1::AlignmentSettings* m) {
 void alignment_to_proto(const Transform& T_cad_scan_best, const DatumAlignmentResult* datum,
                         v1::Alignment* out) {
   out->Clear();
+  out->set_achieved(true);
+  if (datum && !datum->achieved) {
+    // The datum frame could not be made: the best fit's, the datum named and why.
+    out->set_method("best_fit");
+    transform_to_proto(T_cad_scan_best, out->mutable_transform());
+    out->set_achieved(false);
+    out->set_failure(datum->failure);
+    out->set_failed_datum(datum->failed_datum);
+    return;
+  }
   if (!datum) {
     out->set_method("best_fit");
     transform_to_proto(T_cad_scan_best, out->mutable_transform());
@@ -124,6 +136,13 @@ void alignment_to_proto(const Transform& T_cad_scan_best, const DatumAlignmentRe
     shift = std::max(shift, (datum->T_datum_best * r.datum.point - r.datum.point).norm());
   out->set_shift_from_best_fit_mm(shift);
   out->set_passes(datum->passes);
+  for (const DatumRound& r : datum->rounds) {
+    v1::AlignmentRound& m = *out->add_rounds();
+    m.set_stage(r.stage);
+    m.set_band_mm(r.band_mm);
+    m.set_moved_mm(r.moved_mm);
+    m.set_moved_deg(r.moved_deg);
+  }
   for (const DatumResult& r : datum->datums) {
     v1::AlignmentDatum& d = *out->add_datums();
     d.set_name(r.datum.name);
@@ -141,6 +160,7 @@ void alignment_to_proto(const Transform& T_cad_scan_best, const DatumAlignmentRe
     if (r.datum.kind == DatumKind::kHole || r.datum.kind == DatumKind::kSlot)
       d.set_measured_diameter_mm(r.measured_diameter_mm);
     if (r.datum.kind == DatumKind::kPad) put(r.measured_normal, d.mutable_measured_normal());
+    d.set_measured_by(r.measured_by);
   }
 }
 

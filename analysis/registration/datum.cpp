@@ -3,7 +3,10 @@
 #include "analysis/registration/datum.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <numbers>
 #include <set>
 #include <sstream>
 
@@ -22,6 +25,9 @@ constexpr double kRankRatio = 1e-8;     // a direction's information below this 
 constexpr double kConvergedMm = 1e-4;   // a pass moving the frame less than this ends them
 constexpr double kOnPlaneMm = 0.05;     // a datum point this close to a flange's skin is on it
 constexpr double kParallelDot = 0.999;  // a flange's normal this close to the datum's
+// The capture rounds read at most this many scan points (every stride-th): a coarse solve
+// needs a few points per square millimetre of skin, not the laser's full density.
+constexpr std::size_t kCapturePoints = 200'000;
 
 std::optional<Error> bad(std::string_view context, const Datum& d, const std::string& what) {
   return fail(ErrorCode::kInvalidSettings,
@@ -114,7 +120,8 @@ double flange_thickness(const Datum& d, const PartModel& model) {
 std::vector<FeaturePoints> within_reach(const std::vector<Vec3>& scan,
                                         const std::vector<Vec3>& normals, const Transform& T,
                                         const std::vector<Datum>& datums,
-                                        const std::vector<double>& reach, int threads) {
+                                        const std::vector<double>& reach, int threads,
+                                        std::size_t stride = 1) {
   const Transform T_inv = T.inverse();
   std::vector<Vec3> centres;
   std::vector<double> r2;
@@ -122,14 +129,17 @@ std::vector<FeaturePoints> within_reach(const std::vector<Vec3>& scan,
     centres.push_back(T_inv * datums[k].point);
     r2.push_back(reach[k] * reach[k]);
   }
-  std::vector<std::vector<std::vector<std::uint32_t>>> blocks(block_count(scan.size()));
-  parallel_blocks(scan.size(), threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
+  const std::size_t count = (scan.size() + stride - 1) / stride;
+  std::vector<std::vector<std::vector<std::uint32_t>>> blocks(block_count(count));
+  parallel_blocks(count, threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
     auto& mine = blocks[b];
     mine.resize(datums.size());
-    for (std::size_t i = begin; i < end; ++i)
+    for (std::size_t j = begin; j < end; ++j) {
+      const Vec3& p = scan[j * stride];
       for (std::size_t k = 0; k < datums.size(); ++k)
-        if ((scan[i] - centres[k]).squaredNorm() <= r2[k])
-          mine[k].push_back(static_cast<std::uint32_t>(i));
+        if ((p - centres[k]).squaredNorm() <= r2[k])
+          mine[k].push_back(static_cast<std::uint32_t>(j * stride));
+    }
   });
   std::vector<FeaturePoints> out(datums.size());
   for (const auto& block : blocks)
@@ -191,10 +201,8 @@ Vec3 residual_of(const Datum& d, const Vec3& measured) {
   return r;
 }
 
-Error not_measurable(const Datum& d, const FeatureFit& fit) {
-  return fail(ErrorCode::kAnalysisFailed, "alignment: datum '" + d.name + "' (" +
-                                              to_string(d.kind) +
-                                              ") cannot be measured: " + fit.failure);
+std::string not_measurable(const Datum& d, const FeatureFit& fit) {
+  return "datum '" + d.name + "' (" + to_string(d.kind) + ") cannot be measured: " + fit.failure;
 }
 
 }  // namespace
@@ -218,6 +226,8 @@ std::optional<Error> validate(const DatumAlignmentSettings& s, std::string_view 
     return fail(ErrorCode::kInvalidSettings, std::string(context) + what);
   };
   if (!(s.search_mm > 0.0) || !(s.band_mm > 0.0)) return range("search_mm and band_mm must be > 0");
+  if (!(s.capture_mm >= 0.0) || s.capture_mm > 50.0) return range("capture_mm must be 0..50");
+  if (s.max_capture_rounds < 0) return range("max_capture_rounds must be >= 0");
   if (s.min_points < 3) return range("min_points must be >= 3");
   if (!(s.outlier_sigmas >= 1.0)) return range("outlier_sigmas must be >= 1");
   if (s.min_hole_sectors < 3 || s.min_hole_sectors > 12)
@@ -255,32 +265,74 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
                       "): no wall height (no solid flange at its point; set thickness_mm)");
   }
   const Information info = information(datums);
-  std::vector<double> reach;
-  for (const Datum& d : datums)
+  const bool capture = settings.capture_mm > settings.search_mm && settings.max_capture_rounds > 0;
+  // The capture rounds read every stride-th scan point (at most kCapturePoints), gathered
+  // within their wide reach of the best fit; the later rounds every point within their reach
+  // of the captured frame: two passes over the scan, the first a strided one.
+  std::vector<double> capture_reach, reach;
+  for (const Datum& d : datums) {
+    capture_reach.push_back(datum_detail::capture_radius(d, settings.capture_mm) +
+                            settings.capture_mm);
     reach.push_back(datum_detail::gather_radius(d, settings.search_mm) + settings.search_mm);
-  const auto candidates =
-      within_reach(scan, scan_normals, T_cad_scan_best, datums, reach, settings.threads);
+  }
+  const std::size_t stride =
+      std::max<std::size_t>(1, (scan.size() + kCapturePoints - 1) / kCapturePoints);
+  std::vector<FeaturePoints> candidates;
+  if (capture)
+    candidates = within_reach(scan, scan_normals, T_cad_scan_best, datums, capture_reach,
+                              settings.threads, stride);
   DatumAlignmentResult out;
   out.T_cad_scan = T_cad_scan_best;
   std::vector<FeatureFit> fits;
-  for (int pass = 0; pass < settings.max_passes; ++pass) {
-    const double band = pass == 0 ? settings.search_mm : settings.band_mm;
+  // One round: measure every datum (`capture`: the wide search), solve, move the frame.
+  const auto round = [&](const std::string& stage, double band) -> bool {
     fits.clear();
     std::vector<Constraint> constraints;
     for (std::size_t k = 0; k < datums.size(); ++k) {
-      const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
-                                             datum_detail::gather_radius(datums[k], band));
-      fits.push_back(datum_detail::measure_feature(datums[k], near, band, settings));
-      if (!fits.back().measured) return not_measurable(datums[k], fits.back());
+      if (stage == "capture") {
+        const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
+                                               datum_detail::capture_radius(datums[k], band));
+        fits.push_back(datum_detail::capture_feature(datums[k], near, band, settings));
+      } else {
+        const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
+                                               datum_detail::gather_radius(datums[k], band));
+        fits.push_back(datum_detail::measure_feature(datums[k], near, band, settings));
+      }
+      if (!fits.back().measured) {
+        out.failed_datum = datums[k].name;
+        out.failure = not_measurable(datums[k], fits.back());
+        return false;
+      }
       for (const Vec3& dir : fixed_directions(datums[k]))
         constraints.push_back({fits.back().point, datums[k].point, dir, datums[k].weight});
     }
     const Transform step = solve_frame(std::move(constraints), info.origin);
     out.T_cad_scan = step * out.T_cad_scan;
     for (FeatureFit& f : fits) f.point = step * f.point, f.normal = step.linear() * f.normal;
-    out.passes = pass + 1;
-    const double moved = (step * info.origin - info.origin).norm() +
-                         Eigen::AngleAxisd(step.linear()).angle() * info.length;
+    DatumRound r{stage, band, 0.0,
+                 Eigen::AngleAxisd(step.linear()).angle() * 180.0 / std::numbers::pi};
+    for (const Datum& d : datums)
+      r.moved_mm = std::max(r.moved_mm, (step * d.point - d.point).norm());
+    out.rounds.push_back(r);
+    out.passes = static_cast<int>(out.rounds.size());
+    return true;
+  };
+  // A datum not measurable: the best fit, and why (the caller fails the verdict).
+  const auto not_achieved = [&] {
+    out.achieved = false;
+    out.T_cad_scan = T_cad_scan_best;
+    out.T_datum_best = Transform::Identity();
+    return out;
+  };
+  for (int k = 0; capture && k < settings.max_capture_rounds; ++k) {
+    if (!round("capture", settings.capture_mm)) return not_achieved();
+    if (out.rounds.back().moved_mm < 0.5 * settings.search_mm) break;
+  }
+  candidates = within_reach(scan, scan_normals, out.T_cad_scan, datums, reach, settings.threads);
+  for (int pass = 0; pass < settings.max_passes; ++pass) {
+    if (!round(pass == 0 ? "search" : "narrow", pass == 0 ? settings.search_mm : settings.band_mm))
+      return not_achieved();
+    const double moved = out.rounds.back().moved_mm;
     if (pass > 0 && moved < kConvergedMm) break;
   }
   out.T_datum_best = out.T_cad_scan * T_cad_scan_best.inverse();
@@ -296,6 +348,7 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
     r.constraints = static_cast<int>(fixed_directions(datums[k]).size());
     r.points = fits[k].points;
     r.fit_rms_mm = fits[k].rms_mm;
+    r.measured_by = fits[k].measured_by;
     out.datums.push_back(std::move(r));
   }
   return out;

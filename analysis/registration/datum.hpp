@@ -24,8 +24,14 @@
 //      rotations); exact for 3-2-1;
 //   3. steps 1-2 again in the datum frame with the narrow band (the best fit may be a few tenths
 //      of a millimetre off at a datum), until the frame moves less than 1e-4 mm.
-// A datum whose feature cannot be measured (too few points, the hole's wall seen over too small
-// an arc) is an error naming it (kAnalysisFailed), never a silent fallback to the best fit.
+// Before them, capture rounds (datum_capture.cpp): springback elsewhere pulls the best fit up
+// to several millimetres and degrees off at the datums, so each feature is first found within
+// capture_mm (a pad by the dominant skin facing it, a hole or slot by where its outline fits the
+// empty part of the skin's occupancy, then its rim) and the frame solved from those.
+// A hole is measured by what the scan shows: its wall, its rim on the seen skin, or both.
+// A datum whose feature cannot be measured (not in the scan, on the skin it does not see) is
+// never a silent fallback to the best fit: the result says so (`achieved` false, the datum named
+// and why), its frame the best fit, and the caller fails the verdict.
 //
 // Thread safety: pure functions.
 
@@ -64,13 +70,18 @@ struct Datum {
 };
 
 struct DatumAlignmentSettings {
-  std::vector<Datum> datums;    ///< empty: no datum alignment, the best fit is the result frame
-  double search_mm = 1.0;       ///< first pass: features looked for this far off the nominal
+  std::vector<Datum> datums;  ///< empty: no datum alignment, the best fit is the result frame
+  /// Capture rounds: each feature found up to this far off its nominal (and tilted up to 3 deg)
+  /// where the best fit put it, by the dominant skin and the outline in it (a coarse solve);
+  /// <= search_mm: none.
+  double capture_mm = 5.0;
+  double search_mm = 1.0;       ///< the pass after them: features looked for this far off
   double band_mm = 0.15;        ///< later passes, in the datum frame (noise and what is left)
   std::size_t min_points = 12;  ///< fewer scan points on a feature: not measurable
   double outlier_sigmas = 3.0;  ///< robust fits leave out points beyond this many sigmas
   int min_hole_sectors = 6;     ///< of 12 (30 deg each): a hole's wall seen over at least this
-  int max_passes = 4;           ///< measure-and-solve rounds
+  int max_passes = 4;           ///< measure-and-solve rounds after the capture
+  int max_capture_rounds = 2;   ///< capture rounds (ended when one moves less than search_mm / 2)
   int threads = 0;              ///< for the one pass over the scan; 0 = all cores
 };
 
@@ -91,20 +102,38 @@ struct DatumResult {
   int constraints = 0;                    ///< directions it fixes (1 or 2)
   std::size_t points = 0;                 ///< scan points the feature was fitted to
   double fit_rms_mm = 0.0;                ///< their rms distance from the fitted feature
+  /// What of the feature the scan showed and the last round used: "plane" (pad), "wall", "rim"
+  /// or "wall and rim" (hole: weighted by their centres' information), "walls", "rims" or
+  /// "walls and rims" (slot: its straight edges), "skin's end" (edge).
+  std::string measured_by;
+};
+
+/// One measure-and-solve round.
+struct DatumRound {
+  std::string stage;      ///< "capture" (wide, coarse), "search" or "narrow" (datum_measure)
+  double band_mm = 0.0;   ///< how far off the nominal a feature was looked for
+  double moved_mm = 0.0;  ///< the frame's move by the round: its largest at a datum
+  double moved_deg = 0.0;
 };
 
 struct DatumAlignmentResult {
   Transform T_cad_scan = Transform::Identity();    ///< the result frame
   Transform T_datum_best = Transform::Identity();  ///< the result frame from the best fit's
   std::vector<DatumResult> datums;                 ///< in the settings' order
-  int passes = 0;
+  int passes = 0;                                  ///< rounds, the capture's included
+  std::vector<DatumRound> rounds;
+  /// False when a datum cannot be measured: T_cad_scan is then the best fit, `datums` empty,
+  /// `failed_datum` names the datum and `failure` says why (the whole sentence).
+  bool achieved = true;
+  std::string failed_datum;
+  std::string failure;
 };
 
 /// Measures every datum of `settings` in `scan` (scan frame; `scan_normals` one per point
 /// toward the scanner, or empty) placed by the best fit `T_cad_scan_best`, and solves the datum
 /// frame (steps above). `model` gives each hole's and slot's wall height (its flange's
-/// thickness) when the datum does not. Errors: settings (validate), a datum not measurable
-/// (kAnalysisFailed, named), a wall height unknown (a surface model's hole).
+/// thickness) when the datum does not. A datum not measurable: `achieved` false (above).
+/// Errors: settings (validate), a slot without a wall height (a surface model's).
 Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
                                                const std::vector<Vec3>& scan_normals,
                                                const Transform& T_cad_scan_best,

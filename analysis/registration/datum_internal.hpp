@@ -24,6 +24,7 @@ struct FeatureFit {
   double diameter_mm = 0.0;    ///< holes: diameter; slots: width
   std::size_t points = 0;
   double rms_mm = 0.0;
+  std::string measured_by;  ///< what of the feature the scan showed: "plane", "wall", "rim", ...
 };
 
 /// How far from the datum's point a scan point can be and still belong to its feature when the
@@ -33,6 +34,26 @@ double gather_radius(const Datum& datum, double band_mm);
 /// Measures `datum` (thickness resolved) from `near` with features at most `band_mm` off.
 FeatureFit measure_feature(const Datum& datum, const FeaturePoints& near, double band_mm,
                            const DatumAlignmentSettings& settings);
+
+/// How far from the datum's point the capture round (wide search, `capture_mm` off) looks.
+double capture_radius(const Datum& datum, double capture_mm);
+
+/// The capture round's coarse measurement of `datum` (thickness resolved) from `near`, its
+/// feature up to `capture_mm` off the nominal (and tilted up to a few degrees): a pad by the
+/// dominant plane of its skin; a hole or slot by where its outline best fits the empty part of
+/// the skin's occupancy (the skin's rim); an edge by the skin's end (datum_capture.cpp).
+FeatureFit capture_feature(const Datum& datum, const FeaturePoints& near, double capture_mm,
+                           const DatumAlignmentSettings& settings);
+
+/// The rim of a hole or slot on the seen skin, its skin band `band_mm`, the outline within
+/// `band_mm` of the nominal (a slot: its two straight edges). For the capture round's refinement.
+FeatureFit measure_rim(const Datum& datum, const FeaturePoints& near, double band_mm,
+                       const DatumAlignmentSettings& settings);
+
+/// The skin's point spacing around `datum` (1 / sqrt(density) of the skin points facing its
+/// normal within the annulus [r_in, r_out] about its point), or 0 when there are none.
+double skin_spacing(const Datum& datum, const FeaturePoints& near, double band_mm, double r_in,
+                    double r_out);
 
 /// Two unit vectors completing `n` (unit) to a right-handed frame.
 void complete_basis(const Vec3& n, Vec3& e1, Vec3& e2);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "analysis/registration/boundary.hpp"
 #include "analysis/registration/datum_internal.hpp"
@@ -20,6 +21,14 @@ constexpr double kEdgeBandMm = 1.0;     // the band that locates an edge (bounda
 constexpr std::size_t kEdgeSkip = 2;    // stray points beyond the edge
 constexpr double kMadToSigma = 1.4826;  // median absolute deviation of a normal distribution
 constexpr int kRobustRounds = 4;
+constexpr double kNone = std::numeric_limits<double>::infinity();  // no point in a stretch
+constexpr std::size_t kRimSectors = 24;  // a hole's rim: sectors of 15 deg
+constexpr double kRimStretchMm = 1.0;    // a slot's straight rims: stretches this long
+
+// A skin's band never reaches the sheet's other skin.
+double skin_band_of(const Datum& d, double band_mm) {
+  return d.thickness_mm > 0.0 ? std::min(band_mm, 0.45 * d.thickness_mm) : band_mm;
+}
 
 double median_abs(std::vector<double> v) {
   if (v.empty()) return 0.0;
@@ -96,6 +105,7 @@ FeatureFit measure_pad(const Datum& d, const FeaturePoints& near, double band,
   }
   FeatureFit f;
   f.measured = true;
+  f.measured_by = "plane";
   f.normal = normal;
   // Where the measured plane crosses the pad's normal line: what the pad fixes.
   f.point = d.point + (normal.dot(centre - d.point) / normal.dot(d.normal)) * d.normal;
@@ -103,15 +113,17 @@ FeatureFit measure_pad(const Datum& d, const FeaturePoints& near, double band,
   return f;
 }
 
-// ---- hole: a circle fit of the wall ----------------------------------------------------------
+// ---- hole: circles of its wall and of its rim on the seen skin -------------------------------
+
+using Vec2 = Eigen::Vector2d;
 
 struct Circle {
-  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  Vec2 centre = Vec2::Zero();
   double radius = 0.0;
 };
 
 // The algebraic (Kasa) circle: least squares of x^2 + y^2 + D x + E y + F.
-Circle kasa(const std::vector<Eigen::Vector2d>& p, const std::vector<bool>& keep) {
+Circle kasa(const std::vector<Vec2>& p, const std::vector<bool>& keep) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -127,20 +139,28 @@ Circle kasa(const std::vector<Eigen::Vector2d>& p, const std::vector<bool>& keep
   return c;
 }
 
+// The normal matrix of the geometric fit's distances at `c` (centre x, y, radius).
+Eigen::Matrix3d circle_normal_matrix(const std::vector<Vec2>& p, const std::vector<bool>& keep,
+                                     const Circle& c, Eigen::Vector3d* b = nullptr) {
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  if (b) b->setZero();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!keep[i]) continue;
+    const Vec2 v = p[i] - c.centre;
+    const double rho = v.norm();
+    if (rho < 1e-12) continue;
+    const Eigen::Vector3d J(-v.x() / rho, -v.y() / rho, -1.0);
+    A += J * J.transpose();
+    if (b) *b -= J * (rho - c.radius);
+  }
+  return A;
+}
+
 // Geometric least squares of the distances to the circle, Gauss-Newton from `c`.
-Circle geometric(const std::vector<Eigen::Vector2d>& p, const std::vector<bool>& keep, Circle c) {
+Circle geometric(const std::vector<Vec2>& p, const std::vector<bool>& keep, Circle c) {
   for (int it = 0; it < 20; ++it) {
-    Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
-    Eigen::Vector3d b = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (!keep[i]) continue;
-      const Eigen::Vector2d v = p[i] - c.centre;
-      const double rho = v.norm();
-      if (rho < 1e-12) continue;
-      const Eigen::Vector3d J(-v.x() / rho, -v.y() / rho, -1.0);
-      A += J * J.transpose();
-      b -= J * (rho - c.radius);
-    }
+    Eigen::Vector3d b;
+    const Eigen::Matrix3d A = circle_normal_matrix(p, keep, c, &b);
     const Eigen::Vector3d step = A.ldlt().solve(b);
     if (!step.allFinite()) break;
     c.centre += step.head<2>();
@@ -150,147 +170,306 @@ Circle geometric(const std::vector<Eigen::Vector2d>& p, const std::vector<bool>&
   return c;
 }
 
-int sectors_seen(const std::vector<Eigen::Vector2d>& p, const std::vector<bool>& keep,
-                 const Circle& c) {
+int sectors_seen(const std::vector<Vec2>& p, const std::vector<bool>& keep, const Circle& c) {
   std::array<bool, 12> seen{};
   for (std::size_t i = 0; i < p.size(); ++i) {
     if (!keep[i]) continue;
-    const Eigen::Vector2d v = p[i] - c.centre;
+    const Vec2 v = p[i] - c.centre;
     const double a = std::atan2(v.y(), v.x()) + std::numbers::pi;
     seen[std::min<std::size_t>(11, static_cast<std::size_t>(a / (std::numbers::pi / 6.0)))] = true;
   }
   return static_cast<int>(std::count(seen.begin(), seen.end(), true));
 }
 
-// The hole from the in-plane points of its `seen` part ("wall" or "rim"): the robust circle
-// (geometric least squares from the algebraic one, outliers beyond outlier_sigmas left out),
-// seen over at least min_hole_sectors of 12; its centre in the plane of e1, e2 about d.point.
-FeatureFit hole_from_circle_points(const Datum& d, const std::vector<Eigen::Vector2d>& pts,
-                                   const Vec3& e1, const Vec3& e2, const std::string& seen,
-                                   const DatumAlignmentSettings& s) {
-  if (pts.size() < s.min_points) return too_few(pts.size(), "on the hole's " + seen, s.min_points);
+// One robust circle (geometric least squares from the algebraic one, outliers beyond
+// outlier_sigmas left out) and what it is worth: the information of its centre (the inverse of
+// its covariance, rms^2 x the normal matrix's inverse), the 30 deg sectors it covers.
+struct CircleFit {
+  bool fitted = false;
+  Circle circle;
+  Eigen::Matrix2d information = Eigen::Matrix2d::Zero();  // 1 / mm^2
+  std::size_t points = 0;
+  double rms = 0.0;
+  int sectors = 0;
+  std::string failure;
+};
+
+CircleFit robust_circle(const std::vector<Vec2>& pts, const std::string& seen,
+                        const DatumAlignmentSettings& s) {
+  CircleFit out;
+  if (pts.size() < s.min_points) {
+    out.failure = too_few(pts.size(), "on the hole's " + seen, s.min_points).failure;
+    return out;
+  }
   std::vector<bool> keep(pts.size(), true);
-  Circle c;
   std::vector<double> res(pts.size());
   for (int round = 0; round < kRobustRounds; ++round) {
-    c = geometric(pts, keep, round == 0 ? kasa(pts, keep) : c);
-    for (std::size_t i = 0; i < pts.size(); ++i) res[i] = (pts[i] - c.centre).norm() - c.radius;
+    out.circle = geometric(pts, keep, round == 0 ? kasa(pts, keep) : out.circle);
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      res[i] = (pts[i] - out.circle.centre).norm() - out.circle.radius;
     const auto next = inliers_of(res, s.outlier_sigmas);
     if (next == keep) break;
     keep = next;
   }
-  FeatureFit f;
-  f.rms_mm = rms_of(res, keep, f.points);
-  if (f.points < s.min_points) return too_few(f.points, "on the hole's circle", s.min_points);
-  const int sectors = sectors_seen(pts, keep, c);
-  if (sectors < s.min_hole_sectors) {
-    f.failure = "its " + seen + " is seen over " + std::to_string(30 * sectors) +
-                " deg only (needs " + std::to_string(30 * s.min_hole_sectors) + ")";
-    return f;
+  out.rms = rms_of(res, keep, out.points);
+  if (out.points < s.min_points) {
+    out.failure = too_few(out.points, "on the hole's " + seen + " circle", s.min_points).failure;
+    return out;
   }
-  f.measured = true;
-  f.point = d.point + c.centre.x() * e1 + c.centre.y() * e2;
-  f.diameter_mm = 2.0 * c.radius;
-  return f;
+  out.sectors = sectors_seen(pts, keep, out.circle);
+  const Eigen::Matrix3d cov =
+      circle_normal_matrix(pts, keep, out.circle).inverse() * std::max(out.rms * out.rms, 1e-6);
+  out.information = cov.topLeftCorner<2, 2>().inverse();
+  out.fitted = out.information.allFinite();
+  return out;
+}
+
+// The rim of an outline on the seen skin from the skin's points beyond it: per stretch of the
+// outline `arc` mm long, the innermost point lies beyond the rim by the gap of an even spread of
+// points (density 1 / spacing^2) to its first point, 1 / (density x arc) on average; that mean
+// is taken off. Few long stretches: the centre's scatter grows with the root of their number.
+double rim_gap_mean(double spacing, double arc) { return spacing * spacing / arc; }
+
+// The rim of a hole: per sector (kRimSectors), the innermost skin point within band of it, at
+// its radius less the mean gap.
+std::vector<Vec2> rim_points(const Datum& d, const FeaturePoints& near, double band, double gap,
+                             double spacing, const Vec3& e1, const Vec3& e2) {
+  const double r0 = 0.5 * d.diameter_mm;
+  const double width = 2.0 * std::numbers::pi / kRimSectors;
+  const double mean_gap = rim_gap_mean(spacing, width * r0);
+  std::array<double, kRimSectors> inner;
+  inner.fill(std::numeric_limits<double>::infinity());
+  std::array<Vec2, kRimSectors> rim{};
+  // Without normals a solid's wall points just under the rim would count as the skin's: the skin
+  // band narrowed to the wall points' margin.
+  const double skin =
+      near.normals.empty() && d.thickness_mm > 0.0 ? std::min(band, kSkinMarginMm) : band;
+  for (std::size_t i = 0; i < near.points.size(); ++i) {
+    const Vec3 v = near.points[i] - d.point;
+    if (std::abs(v.dot(d.normal)) > skin || !facing(near, i, d.normal, kSkinNormal)) continue;
+    const Vec2 uv(v.dot(e1), v.dot(e2));
+    const double rho = uv.norm();
+    if (rho < r0 - band || rho > r0 + band + gap) continue;
+    const double a = std::atan2(uv.y(), uv.x()) + std::numbers::pi;
+    const auto k = std::min<std::size_t>(kRimSectors - 1, static_cast<std::size_t>(a / width));
+    if (rho < inner[k]) inner[k] = rho, rim[k] = uv;
+  }
+  std::vector<Vec2> pts;
+  for (std::size_t k = 0; k < kRimSectors; ++k)
+    if (std::isfinite(inner[k])) pts.push_back(rim[k] * (1.0 - mean_gap / inner[k]));
+  return pts;
 }
 
 // Wall points: between the two skins (clear of their rims), within `band` of the radius.
-FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band,
-                        const DatumAlignmentSettings& s) {
-  Vec3 e1, e2;
-  complete_basis(d.normal, e1, e2);
+std::vector<Vec2> wall_points(const Datum& d, const FeaturePoints& near, double band,
+                              const Vec3& e1, const Vec3& e2) {
   const double r0 = 0.5 * d.diameter_mm;
-  std::vector<Eigen::Vector2d> pts;
+  std::vector<Vec2> pts;
   for (std::size_t i = 0; i < near.points.size(); ++i) {
     const Vec3 v = near.points[i] - d.point;
     const double h = v.dot(d.normal);
-    const Eigen::Vector2d uv(v.dot(e1), v.dot(e2));
+    const Vec2 uv(v.dot(e1), v.dot(e2));
     if (h > -kSkinMarginMm || h < -d.thickness_mm + kSkinMarginMm) continue;
     if (std::abs(uv.norm() - r0) > band || !on_wall(near, i, d.normal)) continue;
     pts.push_back(uv);
   }
-  return hole_from_circle_points(d, pts, e1, e2, "wall", s);
+  return pts;
 }
 
-// A surface model's hole has no wall: its rim is where the skin's points stop. Per 5 deg
-// sector of the annulus within `band` of the nominal circle, the innermost skin point is a rim
-// point; the robust circle through them gives the centre, unbiased. Those points lie outside
-// the true rim by about a radial gap of the sector's points (1 / (density x radius x sector
-// angle) on average; the robust fit follows the nearer ones): the diameter comes out about
-// 0.1-0.2 mm large at a laser's 11 points per mm^2, and is reported as measured.
-FeatureFit measure_hole_rim(const Datum& d, const FeaturePoints& near, double band,
-                            const DatumAlignmentSettings& s) {
-  constexpr int kRimSectors = 72;
-  constexpr double kSector = 2.0 * std::numbers::pi / kRimSectors;
+// The rim's reach past the nominal: kRimGapSpacings point spacings (at least kRimGapMinMm).
+constexpr double kRimGapSpacings = 4.0;
+constexpr double kRimGapMinMm = 0.3;
+constexpr double kRimReachMm = 3.0;     // the skin's density is taken this far out
+constexpr int kPartialWallSectors = 4;  // a wall of 120 deg still adds to a rim
+constexpr int kRimSectorsNeeded = 9;    // a rim (seen all round on the seen skin) over 270 deg
+// A circle this much wider or narrower than the hole (or 5 %) is something else: a sheet's
+// edge through the search band, another hole.
+constexpr double kDiameterToleranceMm = 0.3;
+
+double rim_gap(const Datum& d, const FeaturePoints& near, double skin_band, double& spacing) {
+  const double r0 = 0.5 * d.diameter_mm;
+  spacing = skin_spacing(d, near, skin_band, r0 + 1.0, r0 + kRimReachMm);
+  return std::max(kRimGapSpacings * spacing, kRimGapMinMm);
+}
+
+FeatureFit from_circle(const Datum& d, const Vec2& centre, double diameter, const CircleFit& a,
+                       const Vec3& e1, const Vec3& e2, const std::string& by) {
+  FeatureFit f;
+  f.measured = true;
+  f.point = d.point + centre.x() * e1 + centre.y() * e2;
+  f.diameter_mm = diameter;
+  f.points = a.points;
+  f.rms_mm = a.rms;
+  f.measured_by = by;
+  return f;
+}
+
+std::string arc_text(const std::string& seen, const CircleFit& c, int need, const Datum& d) {
+  if (!c.fitted) return c.failure;
+  if (std::abs(2.0 * c.circle.radius - d.diameter_mm) >
+      std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm))
+    return "its " + seen + "'s circle is " + std::to_string(2.0 * c.circle.radius) +
+           " mm across (the hole " + std::to_string(d.diameter_mm) + ")";
+  return "its " + seen + " is seen over " + std::to_string(30 * c.sectors) + " deg only (needs " +
+         std::to_string(30 * need) + ")";
+}
+
+// The hole by what the scan shows of it: its wall where seen over min_hole_sectors, its rim on
+// the seen skin where that is, both weighted by the information of their centres where both are
+// (a wall of a one-sided view, seen over part of its circle, fixes the centre along the arc's
+// middle; the rim across it).
+FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band, double skin_band,
+                        const DatumAlignmentSettings& s) {
   Vec3 e1, e2;
   complete_basis(d.normal, e1, e2);
-  const double r0 = 0.5 * d.diameter_mm;
-  const double outer = r0 + band;  // mm
-  std::array<double, kRimSectors> inner;
-  inner.fill(std::numeric_limits<double>::infinity());
-  std::array<Eigen::Vector2d, kRimSectors> rim{};
-  for (std::size_t i = 0; i < near.points.size(); ++i) {
-    const Vec3 v = near.points[i] - d.point;
-    if (std::abs(v.dot(d.normal)) > band || !facing(near, i, d.normal, kSkinNormal)) continue;
-    const Eigen::Vector2d uv(v.dot(e1), v.dot(e2));
-    const double rho = uv.norm();
-    if (rho < r0 - band || rho > outer) continue;
-    const double a = std::atan2(uv.y(), uv.x()) + std::numbers::pi;
-    const auto k = std::min<std::size_t>(kRimSectors - 1, static_cast<std::size_t>(a / kSector));
-    if (rho < inner[k]) inner[k] = rho, rim[k] = uv;
+  CircleFit wall;
+  if (d.thickness_mm > 0.0) wall = robust_circle(wall_points(d, near, band, e1, e2), "wall", s);
+  double spacing = 0.0;
+  const double gap = rim_gap(d, near, skin_band, spacing);
+  const CircleFit rim =
+      robust_circle(rim_points(d, near, skin_band, gap, spacing, e1, e2), "rim", s);
+  const auto size_ok = [&](const CircleFit& c) {
+    return std::abs(2.0 * c.circle.radius - d.diameter_mm) <=
+           std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm);
+  };
+  const bool wall_whole = wall.fitted && size_ok(wall) && wall.sectors >= s.min_hole_sectors;
+  const bool wall_part = wall.fitted && size_ok(wall) && wall.sectors >= kPartialWallSectors;
+  const int rim_need = std::max(s.min_hole_sectors, kRimSectorsNeeded);
+  const bool rim_whole = rim.fitted && size_ok(rim) && rim.sectors >= rim_need;
+  if (rim_whole && wall_part) {
+    const Eigen::Matrix2d info = wall.information + rim.information;
+    const Vec2 c = info.ldlt().solve(wall.information * wall.circle.centre +
+                                     rim.information * rim.circle.centre);
+    FeatureFit f = from_circle(d, c, 2.0 * wall.circle.radius, wall, e1, e2, "wall and rim");
+    f.points += rim.points;
+    return f;
   }
-  std::vector<Eigen::Vector2d> pts;
-  for (int k = 0; k < kRimSectors; ++k)
-    if (std::isfinite(inner[static_cast<std::size_t>(k)]))
-      pts.push_back(rim[static_cast<std::size_t>(k)]);
-  return hole_from_circle_points(d, pts, e1, e2, "rim", s);
+  if (wall_whole)
+    return from_circle(d, wall.circle.centre, 2.0 * wall.circle.radius, wall, e1, e2, "wall");
+  if (rim_whole)
+    return from_circle(d, rim.circle.centre, 2.0 * rim.circle.radius, rim, e1, e2, "rim");
+  FeatureFit f;
+  f.failure = d.thickness_mm > 0.0 ? arc_text("wall", wall, s.min_hole_sectors, d) + "; " +
+                                         arc_text("rim", rim, rim_need, d)
+                                   : arc_text("rim", rim, rim_need, d);
+  return f;
 }
 
-// ---- slot: the mid-plane of its two straight walls -------------------------------------------
+// ---- slot: the mid-plane of its two straight edges (walls or rims) ----------------------------
 
-FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band,
-                        const DatumAlignmentSettings& s) {
+// A robust mean of `u` (the median, then the mean within outlier_sigmas); its variance of the
+// mean in `var`, the points kept in `n`.
+double robust_mean(const std::vector<double>& u, const DatumAlignmentSettings& s, double& var,
+                   std::size_t& n) {
+  std::vector<double> sorted = u;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                   sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  std::vector<double> r(u.size());
+  for (std::size_t i = 0; i < u.size(); ++i) r[i] = u[i] - median;
+  const auto keep = inliers_of(r, s.outlier_sigmas);
+  double sum = 0.0, sum2 = 0.0;
+  n = 0;
+  for (std::size_t i = 0; i < u.size(); ++i)
+    if (keep[i]) sum += u[i], sum2 += u[i] * u[i], ++n;
+  const double mean = sum / static_cast<double>(n);
+  const double spread = std::max(sum2 / static_cast<double>(n) - mean * mean, 1e-6);
+  var = spread / static_cast<double>(n);
+  return mean;
+}
+
+struct SlotEdges {
+  bool measured = false;
+  double mid = 0.0, width = 0.0, var = 0.0, rms = 0.0;
+  std::size_t points = 0;
+  std::string failure;
+};
+
+SlotEdges slot_edges(std::array<std::vector<double>, 2>& side, const std::string& seen,
+                     std::size_t need, const DatumAlignmentSettings& s) {
+  SlotEdges e;
+  double position[2], var[2];
+  for (int k = 0; k < 2; ++k) {
+    auto& u = side[static_cast<std::size_t>(k)];
+    if (u.size() < need) {
+      e.failure =
+          too_few(u.size(), std::string("on the slot's ") + (k ? "+ " : "- ") + seen, need).failure;
+      return e;
+    }
+    std::size_t n = 0;
+    position[k] = robust_mean(u, s, var[k], n);
+    e.points += n;
+    e.rms += var[k] * static_cast<double>(n);
+  }
+  e.measured = true;
+  e.mid = 0.5 * (position[0] + position[1]);
+  e.width = position[1] - position[0];
+  e.var = 0.25 * (var[0] + var[1]);
+  e.rms = std::sqrt(e.rms / static_cast<double>(e.points));
+  return e;
+}
+
+// The straight walls' across-positions, and per bin along the slot (a point spacing) on each side
+// the innermost point of the seen skin within [w/2 - band, w/2 + band + gap]: the rims.
+FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, double skin_band,
+                        const DatumAlignmentSettings& s, bool walls_too = true) {
   const Vec3 along = d.normal.cross(d.direction);
   const double half_width = 0.5 * d.diameter_mm;
   const double straight = 0.5 * (d.length_mm - d.diameter_mm);  // the walls' half length
-  std::array<std::vector<double>, 2> side;                      // across-positions of the -/+ wall
+  double spacing = 0.0;
+  const double gap = rim_gap(d, near, skin_band, spacing);
+  // At least min_points / 2 stretches: a short slot's edges in shorter ones.
+  const int bins = std::max(static_cast<int>(s.min_points / 2),
+                            static_cast<int>(2.0 * straight / kRimStretchMm));
+  const double mean_gap = rim_gap_mean(spacing, 2.0 * straight / bins);
+  const double rim_band = near.normals.empty() ? std::min(skin_band, kSkinMarginMm) : skin_band;
+  std::array<std::vector<double>, 2> wall, inner;
+  for (auto& v : inner) v.assign(static_cast<std::size_t>(bins), kNone);
   for (std::size_t i = 0; i < near.points.size(); ++i) {
     const Vec3 v = near.points[i] - d.point;
     const double h = v.dot(d.normal), a = v.dot(along), u = v.dot(d.direction);
-    if (h > -kSkinMarginMm || h < -d.thickness_mm + kSkinMarginMm || std::abs(a) > straight)
-      continue;
-    if (std::abs(std::abs(u) - half_width) > band || !on_wall(near, i, d.normal)) continue;
-    side[u > 0.0 ? 1 : 0].push_back(u);
+    if (std::abs(a) > straight) continue;
+    const std::size_t k = u > 0.0 ? 1 : 0;
+    if (walls_too && h <= -kSkinMarginMm && h >= -d.thickness_mm + kSkinMarginMm &&
+        std::abs(std::abs(u) - half_width) <= band && on_wall(near, i, d.normal))
+      wall[k].push_back(u);
+    if (std::abs(h) > rim_band || !facing(near, i, d.normal, kSkinNormal)) continue;
+    if (std::abs(u) < half_width - band || std::abs(u) > half_width + band + gap) continue;
+    const auto bin = std::min(static_cast<std::size_t>(bins - 1),
+                              static_cast<std::size_t>((a + straight) / (2.0 * straight) * bins));
+    if (std::abs(u) < std::abs(inner[k][bin])) inner[k][bin] = u;
   }
+  // Per stretch along each straight edge, the innermost skin point less the mean gap.
+  std::array<std::vector<double>, 2> rim;
+  for (std::size_t k = 0; k < 2; ++k)
+    for (double u : inner[k])
+      if (u != kNone) rim[k].push_back(k ? u - mean_gap : u + mean_gap);
+  SlotEdges walls = walls_too ? slot_edges(wall, "wall", s.min_points / 2, s) : SlotEdges{};
+  SlotEdges rims = slot_edges(rim, "rim", s.min_points / 2, s);
+  for (SlotEdges* e : {&walls, &rims})
+    if (e->measured &&
+        std::abs(e->width - d.diameter_mm) > std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm)) {
+      e->measured = false;
+      e->failure = "its edges are " + std::to_string(e->width) + " mm apart (the slot " +
+                   std::to_string(d.diameter_mm) + ")";
+    }
   FeatureFit f;
-  double position[2];
-  std::vector<double> res;
-  std::vector<bool> all;
-  for (int k = 0; k < 2; ++k) {
-    auto& u = side[static_cast<std::size_t>(k)];
-    if (u.size() < s.min_points / 2)
-      return too_few(u.size(), k ? "on the slot's + wall" : "on the slot's - wall",
-                     s.min_points / 2);
-    // A robust mean: the median, then the mean of the points within outlier_sigmas.
-    std::vector<double> sorted = u;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
-                     sorted.end());
-    const double median = sorted[sorted.size() / 2];
-    std::vector<double> r(u.size());
-    for (std::size_t i = 0; i < u.size(); ++i) r[i] = u[i] - median;
-    const auto keep = inliers_of(r, s.outlier_sigmas);
-    double sum = 0.0;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < u.size(); ++i)
-      if (keep[i]) sum += u[i], ++n;
-    position[k] = sum / static_cast<double>(n);
-    for (std::size_t i = 0; i < u.size(); ++i) res.push_back(u[i] - position[k]);
-    all.insert(all.end(), keep.begin(), keep.end());
+  if (!walls.measured && !rims.measured) {
+    f.failure = walls_too ? walls.failure + "; " + rims.failure : rims.failure;
+    return f;
   }
   f.measured = true;
-  f.point = d.point + 0.5 * (position[0] + position[1]) * d.direction;
-  f.diameter_mm = position[1] - position[0];
-  f.rms_mm = rms_of(res, all, f.points);
+  double mid = walls.measured ? walls.mid : rims.mid;
+  f.measured_by = walls.measured ? "walls" : "rims";
+  if (walls.measured && rims.measured) {
+    mid = (walls.mid / walls.var + rims.mid / rims.var) / (1.0 / walls.var + 1.0 / rims.var);
+    f.measured_by = "walls and rims";
+  }
+  const SlotEdges& main = walls.measured ? walls : rims;
+  f.point = d.point + mid * d.direction;
+  f.diameter_mm = main.width;
+  f.points = walls.points + rims.points;
+  f.rms_mm = main.rms;
   return f;
 }
 
@@ -311,6 +490,7 @@ FeatureFit measure_edge(const Datum& d, const FeaturePoints& near, double band,
   if (!end) return too_few(u.size(), "on the skin at the edge", s.min_points + kEdgeSkip);
   FeatureFit f;
   f.measured = true;
+  f.measured_by = "skin's end";
   f.point = d.point + *end * d.direction;
   f.points = u.size();
   return f;
@@ -340,9 +520,9 @@ double gather_radius(const Datum& d, double band_mm) {
     case DatumKind::kPad:
       return std::hypot(d.radius_mm, band_mm);
     case DatumKind::kHole:
-      return std::hypot(0.5 * d.diameter_mm + band_mm, wall);
+      return std::hypot(0.5 * d.diameter_mm + band_mm + kRimReachMm, wall);
     case DatumKind::kSlot:
-      return std::hypot(0.5 * d.length_mm + band_mm, wall);
+      return std::hypot(0.5 * d.length_mm + band_mm + kRimReachMm, wall);
     case DatumKind::kEdge:
       return std::hypot(d.radius_mm, band_mm + 2.0 * kEdgeBandMm, band_mm);
   }
@@ -351,22 +531,55 @@ double gather_radius(const Datum& d, double band_mm) {
 
 FeatureFit measure_feature(const Datum& d, const FeaturePoints& near, double band_mm,
                            const DatumAlignmentSettings& s) {
-  // A skin's band never reaches the sheet's other skin.
-  const double skin_band =
-      d.thickness_mm > 0.0 ? std::min(band_mm, 0.45 * d.thickness_mm) : band_mm;
+  const double skin_band = skin_band_of(d, band_mm);
   switch (d.kind) {
     case DatumKind::kPad:
       return measure_pad(d, near, skin_band, s);
     case DatumKind::kHole:
-      // A surface model (no thickness) has no wall: the rim of its skin.
-      return d.thickness_mm > 0.0 ? measure_hole(d, near, band_mm, s)
-                                  : measure_hole_rim(d, near, skin_band, s);
+      return measure_hole(d, near, band_mm, skin_band, s);
     case DatumKind::kSlot:
-      return measure_slot(d, near, band_mm, s);
+      return measure_slot(d, near, band_mm, skin_band, s);
     case DatumKind::kEdge:
       return measure_edge(d, near, skin_band, s);
   }
   return {};
+}
+
+FeatureFit measure_rim(const Datum& d, const FeaturePoints& near, double band_mm,
+                       const DatumAlignmentSettings& s) {
+  const double skin_band = skin_band_of(d, band_mm);
+  if (d.kind == DatumKind::kSlot) return measure_slot(d, near, band_mm, skin_band, s, false);
+  Vec3 e1, e2;
+  complete_basis(d.normal, e1, e2);
+  double spacing = 0.0;
+  const double gap = rim_gap(d, near, skin_band, spacing);
+  const CircleFit rim =
+      robust_circle(rim_points(d, near, skin_band, gap, spacing, e1, e2), "rim", s);
+  const int rim_need = std::max(s.min_hole_sectors, kRimSectorsNeeded);
+  if (!rim.fitted || rim.sectors < rim_need ||
+      std::abs(2.0 * rim.circle.radius - d.diameter_mm) >
+          std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm)) {
+    FeatureFit f;
+    f.failure = arc_text("rim", rim, rim_need, d);
+    return f;
+  }
+  return from_circle(d, rim.circle.centre, 2.0 * rim.circle.radius, rim, e1, e2, "rim");
+}
+
+double skin_spacing(const Datum& d, const FeaturePoints& near, double band_mm, double r_in,
+                    double r_out) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < near.points.size(); ++i) {
+    const Vec3 v = near.points[i] - d.point;
+    const double h = v.dot(d.normal);
+    const double rho = (v - h * d.normal).norm();
+    if (std::abs(h) <= band_mm && rho >= r_in && rho <= r_out &&
+        facing(near, i, d.normal, kSkinNormal))
+      ++n;
+  }
+  if (n == 0) return 0.0;
+  const double area = std::numbers::pi * (r_out * r_out - r_in * r_in);
+  return std::sqrt(area / static_cast<double>(n));
 }
 
 }  // namespace springscan::analysis::datum_detail

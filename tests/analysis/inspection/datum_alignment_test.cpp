@@ -207,9 +207,10 @@ TEST_P(DatumPart, DatumFrameIsTheConstructedOne) {
   }
 }
 
-// A datum the scan does not have (a hole where the part has none) fails the analysis with the
-// datum's name: never a silent fallback to the best fit.
-TEST_P(DatumPart, UnmeasurableDatumFailsTheAnalysis) {
+// A datum the scan does not have (a hole where the part has none): the report is written in the
+// best-fit frame, the alignment marked not achieved with the datum named and why, and the
+// verdict fails: never a silent fallback to the best fit.
+TEST_P(DatumPart, UnmeasurableDatumFailsTheVerdict) {
   const auto& cad = parts::testing::loaded_part(GetParam());
   RootDatums d = root_datums(cad);
   ASSERT_EQ(d.pads.size(), 3u);
@@ -229,10 +230,21 @@ TEST_P(DatumPart, UnmeasurableDatumFailsTheAnalysis) {
     scan.points.insert(scan.points.end(), pass->cloud.points.begin(), pass->cloud.points.end());
   }
   auto out = run_inspection(testing::exact_model(cad), scan, datum_settings(d));
-  ASSERT_FALSE(out);
-  EXPECT_EQ(out.code(), ErrorCode::kAnalysisFailed);
-  EXPECT_NE(out.message().find("datum 'C' (hole) cannot be measured"), std::string::npos)
-      << out.message();
+  ASSERT_TRUE(out) << out.message();
+  const v1::Alignment& alignment = out->report.alignment();
+  EXPECT_FALSE(alignment.achieved());
+  EXPECT_EQ(alignment.method(), "best_fit");
+  EXPECT_EQ(alignment.failed_datum(), "C");
+  EXPECT_NE(alignment.failure().find("datum 'C' (hole) cannot be measured"), std::string::npos)
+      << alignment.failure();
+  for (int k = 0; k < 16; ++k)
+    EXPECT_EQ(alignment.transform(k), out->report.global_fit().transform(k));
+  EXPECT_FALSE(out->report.verdict().pass());
+  EXPECT_EQ(out->report.verdict().decision(), v1::Verdict::FAIL);
+  ASSERT_GT(out->report.verdict().reasons_size(), 0);
+  EXPECT_NE(
+      out->report.verdict().reasons(out->report.verdict().reasons_size() - 1).find("datum 'C'"),
+      std::string::npos);
 }
 
 // Under the sanitizers (5-15x slower) one part: they look for memory errors and races.

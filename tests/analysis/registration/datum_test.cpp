@@ -40,7 +40,7 @@ struct Plate {
 // The top skin (z = 0, +z): 66,000 uniform random points outside the holes (11 per mm^2, a
 // laser's density); each hole's wall (normals toward the axis, out of the material) every
 // 2 deg and 0.2 mm down.
-Plate plate(bool wall_b = true, int skin_points = 66'000) {
+Plate plate(bool wall_b = true, int skin_points = 66'000, double wall_arc_deg = 360.0) {
   Plate p;
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> ux(0.0, 100.0), uy(0.0, 60.0);
@@ -55,7 +55,7 @@ Plate plate(bool wall_b = true, int skin_points = 66'000) {
     if (h == 1 && !wall_b) continue;
     const Vec3 c = h ? kHoleB : kHoleA;
     const double r = (h ? kDiameterB : kDiameterA) / 2;
-    for (double a = 0.0; a < 360.0; a += 2.0)
+    for (double a = 0.0; a < wall_arc_deg; a += 2.0)
       for (double z = -0.1; z > -kThickness; z -= 0.2) {
         const Vec3 radial(std::cos(a * std::numbers::pi / 180),
                           std::sin(a * std::numbers::pi / 180), 0.0);
@@ -202,13 +202,14 @@ TEST(DatumAlignment, HolesOfASurfaceModelFromTheirRims) {
       std::printf("surface model, seed %u%s: %.5f deg %.5f mm, diameters %.3f %.3f\n", seed,
                   with_normals ? "" : " (points only)", rot, shift,
                   r->datums[3].measured_diameter_mm, r->datums[4].measured_diameter_mm);
-      // The rim is the skin's points' edge (11 points per mm^2): the frame to a few
-      // hundredths; the diameters a little large (the innermost points lie outside the rim).
+      // The rim is the skin's points' edge (11 points per mm^2, 24 sectors): the frame to a
+      // few hundredths; the diameters within a tenth (the mean gap to the innermost points is
+      // taken off).
       EXPECT_LE(rot, 0.05);
       EXPECT_LE(shift, 0.05);
       for (const auto& [k, nominal] : {std::pair{3, kDiameterA}, std::pair{4, kDiameterB}}) {
-        EXPECT_GE(r->datums[static_cast<std::size_t>(k)].measured_diameter_mm, nominal - 0.02);
-        EXPECT_LE(r->datums[static_cast<std::size_t>(k)].measured_diameter_mm, nominal + 0.3);
+        EXPECT_EQ(r->datums[static_cast<std::size_t>(k)].measured_by, "rim");
+        EXPECT_NEAR(r->datums[static_cast<std::size_t>(k)].measured_diameter_mm, nominal, 0.1);
       }
     }
   }
@@ -220,7 +221,7 @@ TEST(DatumAlignment, PointsOnly) {
   auto r = align_to_datums(c.scan, {}, c.best, plate_model(), three_two_one());
   ASSERT_TRUE(r) << r.message();
   const auto [rot, shift] = frame_error(r->T_cad_scan, c.pose);
-  std::printf("points only: %.5f deg %.5f mm\n", rot, shift);
+  std::printf("points only: %.5f deg %.5f mm %s\n", rot, shift, r->failure.c_str());
   EXPECT_LE(rot, 0.005);
   EXPECT_LE(shift, 0.01);
 }
@@ -303,12 +304,114 @@ TEST(DatumAlignment, OneMillionPoints) {
   EXPECT_LE(shift, 0.005);
 }
 
-TEST(DatumAlignment, UnmeasurableDatumIsAnErrorWithItsName) {
-  const Case c = scan_case(plate(/*wall_b=*/false), 7);
+// The best fit off by 3 deg (about an axis through the datums' centre) and shifted so that its
+// largest miss at a datum is `miss_mm`: what springback elsewhere on a part does to it.
+Transform displaced(const Vec3& axis, double deg, const Vec3& shift_direction, double miss_mm) {
+  const DatumAlignmentSettings s = three_two_one();
+  Vec3 centre = Vec3::Zero();
+  for (const Datum& d : s.datums) centre += d.point / static_cast<double>(s.datums.size());
+  Transform E = Transform::Identity();
+  E.linear() =
+      Eigen::AngleAxisd(deg * std::numbers::pi / 180, axis.normalized()).toRotationMatrix();
+  const auto miss = [&](double k) {
+    E.translation() = centre - E.linear() * centre + k * shift_direction.normalized();
+    double m = 0.0;
+    for (const Datum& d : s.datums) m = std::max(m, (E * d.point - d.point).norm());
+    return m;
+  };
+  double lo = 0.0, hi = 2.0 * miss_mm;
+  for (int it = 0; it < 60; ++it) (miss(0.5 * (lo + hi)) < miss_mm ? lo : hi) = 0.5 * (lo + hi);
+  miss(lo);
+  return E;
+}
+
+// 2 % of the points moved along their normal by up to +-3 mm (a laser's outliers, along its ray).
+void add_ray_outliers(Plate& p, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> along(-3.0, 3.0);
+  for (std::size_t i = 0; i < p.points.size(); i += 50) p.points[i] += along(rng) * p.normals[i];
+}
+
+// Capture range: every datum found and the frame converged from a best fit 3 deg and up to
+// 5 mm off at a datum, at sigma 0.02 mm, and at sigma 0.05 mm with 2 % outliers.
+TEST(DatumAlignment, CaptureRangeFiveMillimetresThreeDegrees) {
+  struct Miss {
+    Vec3 axis, shift;
+  };
+  const std::vector<Miss> misses = {{Vec3(0, 0, 1), Vec3(1, 0, 0)},
+                                    {Vec3(1, 0, 0), Vec3(0, 0, 1)},
+                                    {Vec3(1, 2, 3), Vec3(-1, 1, 0)},
+                                    {Vec3(-2, 1, 0.5), Vec3(0.3, -1, 0.8)}};
+  for (const bool noisy : {false, true}) {
+    Plate p = plate();
+    if (noisy) add_ray_outliers(p, 21);
+    for (std::size_t k = 0; k < misses.size(); ++k) {
+      const unsigned seed = 30 + static_cast<unsigned>(k);
+      Case c = scan_case(p, seed);
+      if (noisy) testing::add_noise(c.scan, std::sqrt(0.05 * 0.05 - 0.02 * 0.02), seed + 100);
+      const Transform E = displaced(misses[k].axis, 3.0, misses[k].shift, 5.0);
+      c.best = E * c.pose.inverse();
+      const auto before = frame_error(c.best, c.pose);
+      auto r = align_to_datums(c.scan, c.normals, c.best, plate_model(), three_two_one());
+      ASSERT_TRUE(r) << r.message();
+      ASSERT_TRUE(r->achieved) << r->failure;
+      const auto [rot, shift] = frame_error(r->T_cad_scan, c.pose);
+      std::printf("%s miss %zu: best fit %.2f deg %.2f mm -> %.5f deg %.5f mm, rounds:",
+                  noisy ? "sigma 0.05, 2 % outliers," : "sigma 0.02,", k, before.first,
+                  before.second, rot, shift);
+      for (const DatumRound& round : r->rounds)
+        std::printf(" %s %.2f (%.3f mm)", round.stage.c_str(), round.band_mm, round.moved_mm);
+      std::printf("\n");
+      EXPECT_EQ(r->rounds.front().stage, "capture");
+      EXPECT_LE(rot, noisy ? 0.01 : 0.005);
+      EXPECT_LE(shift, noisy ? 0.04 : 0.02);
+    }
+  }
+}
+
+// A one-sided, tilted view sees each hole's wall over 150 deg only (fewer than the 180 a wall
+// needs alone) and the rim of the seen skin all round: the hole is measured by both, weighted.
+TEST(DatumAlignment, HoleSeenOverPartOfItsWallUsesItsRim) {
+  const Case c = scan_case(plate(true, 66'000, 150.0), 41);
   auto r = align_to_datums(c.scan, c.normals, c.best, plate_model(), three_two_one());
-  ASSERT_FALSE(r);
-  EXPECT_EQ(r.code(), ErrorCode::kAnalysisFailed);
-  EXPECT_NE(r.message().find("'C' (hole)"), std::string::npos) << r.message();
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_TRUE(r->achieved) << r->failure;
+  const auto [rot, shift] = frame_error(r->T_cad_scan, c.pose);
+  std::printf("wall over 150 deg: %.5f deg %.5f mm, hole B by %s, C by %s\n", rot, shift,
+              r->datums[3].measured_by.c_str(), r->datums[4].measured_by.c_str());
+  EXPECT_EQ(r->datums[3].measured_by, "wall and rim");
+  EXPECT_EQ(r->datums[4].measured_by, "wall and rim");
+  EXPECT_LE(rot, 0.005);
+  EXPECT_LE(shift, 0.02);
+  // Without the wall at all (a view that sees none of it): the rim alone.
+  const Case bare = scan_case(plate(true, 66'000, 0.0), 42);
+  r = align_to_datums(bare.scan, bare.normals, bare.best, plate_model(), three_two_one());
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_TRUE(r->achieved) << r->failure;
+  const auto [rot2, shift2] = frame_error(r->T_cad_scan, bare.pose);
+  std::printf("no wall: %.5f deg %.5f mm, hole B by %s\n", rot2, shift2,
+              r->datums[3].measured_by.c_str());
+  EXPECT_EQ(r->datums[3].measured_by, "rim");
+  EXPECT_LE(rot2, 0.02);
+  EXPECT_LE(shift2, 0.04);
+}
+
+// A datum the scan does not show (hole C's wall and skin cut away): the frame stays the best
+// fit, marked not achieved, with the datum named and why (the pipeline fails the verdict).
+TEST(DatumAlignment, UnmeasurableDatumIsNamedAndTheFrameIsTheBestFit) {
+  Plate p = plate(/*wall_b=*/false);
+  Plate cut;
+  for (std::size_t i = 0; i < p.points.size(); ++i)
+    if ((p.points[i] - kHoleB).norm() > 9.0)
+      cut.points.push_back(p.points[i]), cut.normals.push_back(p.normals[i]);
+  const Case c = scan_case(cut, 7);
+  auto r = align_to_datums(c.scan, c.normals, c.best, plate_model(), three_two_one());
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_FALSE(r->achieved);
+  EXPECT_EQ(r->failed_datum, "C");
+  EXPECT_NE(r->failure.find("'C' (hole) cannot be measured"), std::string::npos) << r->failure;
+  EXPECT_TRUE(r->T_cad_scan.isApprox(c.best));
+  EXPECT_TRUE(r->datums.empty());
 }
 
 TEST(DatumAlignment, SettingsNameWhatIsWrong) {
