@@ -103,8 +103,8 @@ struct DatumResult {
   std::size_t points = 0;                 ///< scan points the feature was fitted to
   double fit_rms_mm = 0.0;                ///< their rms distance from the fitted feature
   /// What of the feature the scan showed and the last round used: "plane" (pad), "wall", "rim"
-  /// or "wall and rim" (hole: weighted by their centres' information), "walls", "rims" or
-  /// "walls and rims" (slot: its straight edges), "skin's end" (edge).
+  /// or "wall and rim" (hole: weighted by their centres' information), "walls" or "rims" (slot:
+  /// its straight edges, both walls where seen), "skin's end" (edge).
   std::string measured_by;
 };
 

@@ -22,7 +22,8 @@ constexpr double kEdgeBandMm = 1.0;    // the band that locates an edge (boundar
 constexpr std::size_t kEdgeSkip = 2;   // stray points beyond the edge
 constexpr double kMinRingShare = 0.8;  // an outline's ring at least this full of skin
 constexpr double kCellSpacings = 2.0;
-constexpr double kStrayShare = 0.02;   // of an outline's inside cells: stray points  // occupancy cells this many point spacings wide
+constexpr double kStrayShare = 0.02;     // of an outline's inside cells: stray points  // occupancy
+                                         // cells this many point spacings wide
 constexpr double kCaptureTiltDeg = 3.0;  // the tilt the height window allows for
 
 struct Plane {
@@ -79,7 +80,8 @@ Plane dominant_plane(const Datum& d, const FeaturePoints& near, double r_in, dou
   std::vector<int> sum(static_cast<std::size_t>(bins), 0);
   int fullest = 0;
   for (int b = 0; b < bins; ++b) {
-    for (int k = b; k < std::min(bins, b + w); ++k) sum[static_cast<std::size_t>(b)] += count[static_cast<std::size_t>(k)];
+    for (int k = b; k < std::min(bins, b + w); ++k)
+      sum[static_cast<std::size_t>(b)] += count[static_cast<std::size_t>(k)];
     fullest = std::max(fullest, sum[static_cast<std::size_t>(b)]);
   }
   if (fullest < static_cast<int>(min_points)) return {};
@@ -122,7 +124,8 @@ FeatureFit not_found(const std::string& why) {
 FeatureFit capture_pad(const Datum& d, const FeaturePoints& near, double capture,
                        const DatumAlignmentSettings& s) {
   const Plane p = dominant_plane(d, near, 0.0, d.radius_mm, capture, s.min_points);
-  if (!p.found) return not_found("no skin facing the pad within " + std::to_string(capture) + " mm");
+  if (!p.found)
+    return not_found("no skin facing the pad within " + std::to_string(capture) + " mm");
   // Where the found plane crosses the pad's normal line: what the pad fixes.
   FeatureFit f;
   f.measured = true;
@@ -222,7 +225,8 @@ FeatureFit capture_outline(const Datum& d, const FeaturePoints& near, double cap
   Eigen::Vector2d centre = Eigen::Vector2d::Zero();
   int tied = 0;
   for (const Score& k : scores)
-    if (k.inside == least && k.ring >= best_ring - 0.05) centre += Eigen::Vector2d(k.x, k.y), ++tied;
+    if (k.inside == least && k.ring >= best_ring - 0.05)
+      centre += Eigen::Vector2d(k.x, k.y), ++tied;
   centre *= cell / tied;
   // Refined on the rim about that centre (datum_measure.cpp), else the grid's centre.
   Datum found = dp;

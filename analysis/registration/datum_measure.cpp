@@ -23,7 +23,8 @@ constexpr double kMadToSigma = 1.4826;  // median absolute deviation of a normal
 constexpr int kRobustRounds = 4;
 constexpr double kNone = std::numeric_limits<double>::infinity();  // no point in a stretch
 constexpr std::size_t kRimSectors = 24;  // a hole's rim: sectors of 15 deg
-constexpr double kRimStretchMm = 1.0;    // a slot's straight rims: stretches this long
+constexpr double kRimStretchMm = 2.0;    // a slot's straight rims: stretches this long
+constexpr int kRimStretches = 3;         // ... at least this many per edge
 
 // A skin's band never reaches the sheet's other skin.
 double skin_band_of(const Datum& d, double band_mm) {
@@ -287,7 +288,8 @@ constexpr int kRimSectorsNeeded = 9;    // a rim (seen all round on the seen ski
 constexpr double kDiameterToleranceMm = 0.3;
 
 double rim_gap(const Datum& d, const FeaturePoints& near, double skin_band, double& spacing) {
-  const double r0 = 0.5 * d.diameter_mm;
+  // Beyond the whole outline: a slot's reaches half its length from its centre.
+  const double r0 = 0.5 * (d.kind == DatumKind::kSlot ? d.length_mm : d.diameter_mm);
   spacing = skin_spacing(d, near, skin_band, r0 + 1.0, r0 + kRimReachMm);
   return std::max(kRimGapSpacings * spacing, kRimGapMinMm);
 }
@@ -380,7 +382,7 @@ double robust_mean(const std::vector<double>& u, const DatumAlignmentSettings& s
 
 struct SlotEdges {
   bool measured = false;
-  double mid = 0.0, width = 0.0, var = 0.0, rms = 0.0;
+  double mid = 0.0, width = 0.0, rms = 0.0;
   std::size_t points = 0;
   std::string failure;
 };
@@ -404,7 +406,6 @@ SlotEdges slot_edges(std::array<std::vector<double>, 2>& side, const std::string
   e.measured = true;
   e.mid = 0.5 * (position[0] + position[1]);
   e.width = position[1] - position[0];
-  e.var = 0.25 * (var[0] + var[1]);
   e.rms = std::sqrt(e.rms / static_cast<double>(e.points));
   return e;
 }
@@ -418,9 +419,8 @@ FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, 
   const double straight = 0.5 * (d.length_mm - d.diameter_mm);  // the walls' half length
   double spacing = 0.0;
   const double gap = rim_gap(d, near, skin_band, spacing);
-  // At least min_points / 2 stretches: a short slot's edges in shorter ones.
-  const int bins = std::max(static_cast<int>(s.min_points / 2),
-                            static_cast<int>(2.0 * straight / kRimStretchMm));
+  // Long stretches (the innermost point's gap shrinks with the stretch), at least kRimStretches.
+  const int bins = std::max(kRimStretches, static_cast<int>(2.0 * straight / kRimStretchMm));
   const double mean_gap = rim_gap_mean(spacing, 2.0 * straight / bins);
   const double rim_band = near.normals.empty() ? std::min(skin_band, kSkinMarginMm) : skin_band;
   std::array<std::vector<double>, 2> wall, inner;
@@ -445,7 +445,7 @@ FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, 
     for (double u : inner[k])
       if (u != kNone) rim[k].push_back(k ? u - mean_gap : u + mean_gap);
   SlotEdges walls = walls_too ? slot_edges(wall, "wall", s.min_points / 2, s) : SlotEdges{};
-  SlotEdges rims = slot_edges(rim, "rim", s.min_points / 2, s);
+  SlotEdges rims = slot_edges(rim, "rim", kRimStretches, s);
   for (SlotEdges* e : {&walls, &rims})
     if (e->measured &&
         std::abs(e->width - d.diameter_mm) > std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm)) {
@@ -458,18 +458,15 @@ FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, 
     f.failure = walls_too ? walls.failure + "; " + rims.failure : rims.failure;
     return f;
   }
+  // Both walls where seen (exact, sharp); else both rims, whose gaps to the innermost points
+  // cancel in their middle where a wall and the other's rim would not.
   f.measured = true;
-  double mid = walls.measured ? walls.mid : rims.mid;
+  const SlotEdges& used = walls.measured ? walls : rims;
   f.measured_by = walls.measured ? "walls" : "rims";
-  if (walls.measured && rims.measured) {
-    mid = (walls.mid / walls.var + rims.mid / rims.var) / (1.0 / walls.var + 1.0 / rims.var);
-    f.measured_by = "walls and rims";
-  }
-  const SlotEdges& main = walls.measured ? walls : rims;
-  f.point = d.point + mid * d.direction;
-  f.diameter_mm = main.width;
-  f.points = walls.points + rims.points;
-  f.rms_mm = main.rms;
+  f.point = d.point + used.mid * d.direction;
+  f.diameter_mm = used.width;
+  f.points = used.points;
+  f.rms_mm = used.rms;
   return f;
 }
 
