@@ -19,9 +19,9 @@ using namespace springscan::analysis;
 /// either side of `centre` along the axis).
 struct Cutout {
   Vec3 centre = Vec3::Zero();
-  Vec3 axis = Vec3::UnitZ();  ///< unit
-  double diameter_mm = 0.0;   ///< a slot's width
-  double length_mm = 0.0;     ///< a slot's overall length; 0: a round hole
+  Vec3 axis = Vec3::UnitZ();   ///< unit
+  double diameter_mm = 0.0;    ///< a slot's width
+  double length_mm = 0.0;      ///< a slot's overall length; 0: a round hole
   Vec3 along = Vec3::UnitX();  ///< unit, across `axis`: a slot's long direction
 };
 

@@ -36,11 +36,11 @@ struct At {
 struct OwnPart {
   std::string name;
   parts::ProfileSpec spec;
-  int root = 0;             // the flange index of the root (the largest)
-  std::vector<At> pads;     // three
-  At hole;                  // B
+  int root = 0;          // the flange index of the root (the largest)
+  std::vector<At> pads;  // three
+  At hole;               // B
   double hole_diameter = 0.0;
-  At pin;                   // C: a 2-way hole, or a slot whose long axis points at B
+  At pin;  // C: a 2-way hole, or a slot whose long axis points at B
   double pin_diameter = 0.0;
   double pin_length = 0.0;  // > pin_diameter: a slot
 };
@@ -97,8 +97,8 @@ std::vector<parts::Cutout> cutouts_of(const OwnPart& p) {
   const RootFrame f = root_frame(p);
   const std::vector<Datum> d = datums_of(p);
   std::vector<parts::Cutout> out = {{d[3].point, f.normal, p.hole_diameter, 0.0, f.along}};
-  out.push_back({d[4].point, f.normal, p.pin_diameter, p.pin_length,
-                 (d[4].point - d[3].point).normalized()});
+  out.push_back(
+      {d[4].point, f.normal, p.pin_diameter, p.pin_length, (d[4].point - d[3].point).normalized()});
   return out;
 }
 
@@ -122,12 +122,21 @@ parts::CadPart build(const OwnPart& p) {
 // symmetric, so that its best fit has one orientation); holes of 10,
 // 8 and 12 mm, pins of 6 mm, a 6 x 14 slot and a 5 x 12 slot.
 std::vector<OwnPart> own_parts() {
-  OwnPart bracket{"bracket", {{110, 40}, {90}, {2.0}, 80.0, 2.0}, 0,
-                  {{12, 12}, {98, 14}, {55, 68}}, {30, 40}, 10.0, {85, 55}, 6.0, 0.0};
-  OwnPart tray{"tray", {{30, 140, 30, 12}, {90, 90, -90}, {1.5, 1.5, 2.5}, 90.0, 1.5}, 1,
-               {{12, 10}, {128, 12}, {70, 78}}, {40, 45}, 8.0, {110, 45}, 6.0, 14.0};
-  OwnPart panel{"panel", {{20, 170, 32}, {-90, -90}, {3.0, 3.0}, 100.0, 1.0}, 1,
-                {{12, 12}, {158, 12}, {85, 88}}, {30, 70}, 12.0, {140, 40}, 5.0, 12.0};
+  OwnPart bracket{"bracket", {{110, 40}, {90}, {2.0}, 80.0, 2.0},
+                  0,         {{12, 12}, {98, 14}, {55, 68}},
+                  {30, 40},  10.0,
+                  {85, 55},  6.0,
+                  0.0};
+  OwnPart tray{"tray",    {{30, 140, 30, 12}, {90, 90, -90}, {1.5, 1.5, 2.5}, 90.0, 1.5},
+               1,         {{12, 10}, {128, 12}, {70, 78}},
+               {40, 45},  8.0,
+               {110, 45}, 6.0,
+               14.0};
+  OwnPart panel{"panel",   {{20, 170, 32}, {-90, -90}, {3.0, 3.0}, 100.0, 1.0},
+                1,         {{12, 12}, {158, 12}, {85, 88}},
+                {30, 70},  12.0,
+                {140, 40}, 5.0,
+                12.0};
   return {bracket, tray, panel};
 }
 
@@ -138,7 +147,8 @@ struct View {
 };
 
 View view(const std::string& name) {
-  const double s = std::sin(35.0 * std::numbers::pi / 180), c = std::cos(35.0 * std::numbers::pi / 180);
+  const double s = std::sin(35.0 * std::numbers::pi / 180),
+               c = std::cos(35.0 * std::numbers::pi / 180);
   if (name == "one-sided") return {name, {Vec3(s, 0, -c), Vec3(-s, 0, -c)}};
   if (name == "tilted") {
     const double d = s / std::sqrt(2.0);
@@ -148,7 +158,7 @@ View view(const std::string& name) {
 }
 
 struct Outcome {
-  double rotation_deg = 0.0, shift_mm = 0.0;      // the datum frame's error
+  double rotation_deg = 0.0, shift_mm = 0.0;  // the datum frame's error
   double best_rotation_deg = 0.0, best_shift_mm = 0.0;
   double floor_rotation_deg = 0.0, floor_shift_mm = 0.0;
   std::string measured_by;
@@ -165,7 +175,8 @@ std::pair<double, double> noise_floor(const v1::Alignment& a, const std::vector<
   Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
   for (std::size_t k = 0; k < datums.size(); ++k) {
     const Datum& d = datums[k];
-    const auto n = static_cast<double>(std::max<std::int64_t>(a.datums(static_cast<int>(k)).points(), 1));
+    const auto n =
+        static_cast<double>(std::max<std::int64_t>(a.datums(static_cast<int>(k)).points(), 1));
     const double rms = std::max(a.datums(static_cast<int>(k)).fit_rms_mm(), 1e-3);
     double sigma = rms / std::sqrt(n);
     std::vector<Vec3> dirs = {d.normal};
@@ -191,11 +202,11 @@ std::pair<double, double> noise_floor(const v1::Alignment& a, const std::vector<
     const Vec3 r = q - o;
     A << 0, r.z(), -r.y(), 1, 0, 0, -r.z(), 0, r.x(), 0, 1, 0, r.y(), -r.x(), 0, 0, 0, 1;
     const Mat3 c = A * cov * A.transpose();
-    shift = std::max(shift, std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(c).eigenvalues().maxCoeff()));
+    shift =
+        std::max(shift, std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(c).eigenvalues().maxCoeff()));
   }
-  const double rot = std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(cov.topLeftCorner<3, 3>())
-                                   .eigenvalues()
-                                   .maxCoeff());
+  const double rot = std::sqrt(
+      Eigen::SelfAdjointEigenSolver<Mat3>(cov.topLeftCorner<3, 3>()).eigenvalues().maxCoeff());
   return {rot * 180.0 / std::numbers::pi, shift};
 }
 
@@ -211,7 +222,8 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> springback(1.0, 3.0);
   std::vector<double> sb;
-  for (std::size_t k = 0; k < cad.model.segmentation.bends.size(); ++k) sb.push_back(springback(rng));
+  for (std::size_t k = 0; k < cad.model.segmentation.bends.size(); ++k)
+    sb.push_back(springback(rng));
   auto part = parts::make_produced_part(cad.model, cad.shape, sb);
   EXPECT_TRUE(part) << part.message();
   if (!part) return out;
@@ -219,12 +231,14 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
   Mat3 R;  // root frame -> part frame
   R << f.along, Vec3::UnitY(), f.normal;
   parts::LaserScanSettings ls;
-  ls.point_count = (testing::kUnderSanitizer ? 40'000 : 240'000) / static_cast<long>(v.directions.size());
+  ls.point_count =
+      (testing::kUnderSanitizer ? 40'000 : 240'000) / static_cast<long>(v.directions.size());
   ls.noise_sigma_mm = noisy ? 0.05 : 0.02;
   ls.outlier_fraction = noisy ? 0.02 : 0.0;
   ls.line_direction = Vec3(0.35, 1.0, 0.0).normalized();
   ls.threads = 2;
-  std::uniform_real_distribution<double> turn(-std::numbers::pi, std::numbers::pi), shift(-150, 150);
+  std::uniform_real_distribution<double> turn(-std::numbers::pi, std::numbers::pi),
+      shift(-150, 150);
   ls.T_scan_part = Transform::Identity();
   ls.T_scan_part.linear() = Eigen::AngleAxisd(turn(rng), Vec3::UnitZ()).toRotationMatrix() *
                             Eigen::AngleAxisd(0.05, Vec3::UnitX()).toRotationMatrix();
@@ -259,7 +273,8 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
   std::tie(out.rotation_deg, out.shift_mm) =
       frame_error(testing::from_row_major(a.transform()) * ls.T_scan_part, points);
   std::tie(out.floor_rotation_deg, out.floor_shift_mm) = noise_floor(a, ds.datums, points);
-  for (const auto& d : a.datums()) out.measured_by += (out.measured_by.empty() ? "" : ", ") + d.name() + " " + d.measured_by();
+  for (const auto& d : a.datums())
+    out.measured_by += (out.measured_by.empty() ? "" : ", ") + d.name() + " " + d.measured_by();
   return out;
 }
 
@@ -270,8 +285,8 @@ TEST_P(DatumOwnPart, FrameWithinBoundsOfTheConstruction) {
     std::string view;
     bool noisy;
   };
-  std::vector<Condition> conditions = {{"one-sided", false}, {"tilted", true}, {"all-round", false},
-                                       {"one-sided", true}};
+  std::vector<Condition> conditions = {
+      {"one-sided", false}, {"tilted", true}, {"all-round", false}, {"one-sided", true}};
   if (testing::kUnderSanitizer) conditions.resize(1);
   unsigned seed = 10 * static_cast<unsigned>(GetParam());
   {
@@ -284,10 +299,11 @@ TEST_P(DatumOwnPart, FrameWithinBoundsOfTheConstruction) {
       const Outcome o = run_case(p, cad, view(c.view), c.noisy, ++seed);
       const double rot_bound = std::max(c.noisy ? 0.01 : 0.005, 3.0 * o.floor_rotation_deg);
       const double shift_bound = std::max(c.noisy ? 0.04 : 0.02, 3.0 * o.floor_shift_mm);
-      std::printf("| %s | %s, %s | %.3f deg, %.3f mm | %.4f deg, %.4f mm | %.4f deg, %.4f mm | %s |\n",
-                  p.name.c_str(), c.view.c_str(), c.noisy ? "sigma 0.05, 2 % outliers" : "sigma 0.02",
-                  o.best_rotation_deg, o.best_shift_mm, o.rotation_deg, o.shift_mm, rot_bound,
-                  shift_bound, o.measured_by.c_str());
+      std::printf(
+          "| %s | %s, %s | %.3f deg, %.3f mm | %.4f deg, %.4f mm | %.4f deg, %.4f mm | %s |\n",
+          p.name.c_str(), c.view.c_str(), c.noisy ? "sigma 0.05, 2 % outliers" : "sigma 0.02",
+          o.best_rotation_deg, o.best_shift_mm, o.rotation_deg, o.shift_mm, rot_bound, shift_bound,
+          o.measured_by.c_str());
       EXPECT_LE(o.rotation_deg, rot_bound) << p.name << " " << c.view;
       EXPECT_LE(o.shift_mm, shift_bound) << p.name << " " << c.view;
     }
@@ -295,8 +311,7 @@ TEST_P(DatumOwnPart, FrameWithinBoundsOfTheConstruction) {
 }
 
 // Under the sanitizers (5-15x slower) the bracket alone, one condition.
-INSTANTIATE_TEST_SUITE_P(Parts, DatumOwnPart,
-                         ::testing::Range(0, testing::kUnderSanitizer ? 1 : 3),
+INSTANTIATE_TEST_SUITE_P(Parts, DatumOwnPart, ::testing::Range(0, testing::kUnderSanitizer ? 1 : 3),
                          [](const ::testing::TestParamInfo<int>& param) {
                            return std::string(param.param == 0   ? "Bracket"
                                               : param.param == 1 ? "Tray"
