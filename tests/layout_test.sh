@@ -22,9 +22,9 @@ violation "analysis/ sees no device, socket, Modbus, USB or systemd header" \
 violation "the generated proto header only in analysis/messages/ and the pipeline's result type" \
   "$(sources analysis | grep -vE '^analysis/(messages/|inspection/pipeline\.(hpp|cpp))' |
      xargs grep -n '"proto/springscan.pb.h"' || true)"
-violation "OpenCASCADE only in analysis/cad/ (and the test parts' profile and artefact solids)" \
+violation "OpenCASCADE only in analysis/cad/ (and the test parts' profile, cutout and artefact solids)" \
   "$(sources analysis drivers daemon report cli simulators |
-     grep -vE '^(analysis/cad/|simulators/parts/(cad_profile|artefact)\.cpp)' |
+     grep -vE '^(analysis/cad/|simulators/parts/(cad_profile|sheet_cutouts|artefact)\.cpp)' |
      xargs grep -nE '#include <[A-Za-z0-9]+_[A-Za-z0-9_]*\.hxx>|#include <(gp|TopoDS|Standard)[A-Za-z_]*\.hxx>' || true)"
 violation "VTK only in analysis/preprocess/decimation.cpp (the mesh decimation's adapter)" \
   "$(sources analysis drivers daemon report cli simulators |
