@@ -1,18 +1,25 @@
 #pragma once
-// The verdict (DESIGN.md stage 9): pass/fail of one inspection from the stage results,
-// with every failing rule in the reasons and its numbers, so the operator and the PLC log see
-// why ("p95 |deviation| 0.84 mm > tolerance 0.50 mm"). VerdictSettings is the one owner of the
-// tolerances: the deviation and springback stages measure, only the verdict judges, and the
-// report copies its decisions (verdict_proto.hpp), per bend too.
+// The verdict (DESIGN.md stage 9): the decision on one inspection from the stage results, with
+// every characteristic that does not conform in the reasons, its value, its expanded
+// uncertainty U and its limit, so the operator and the PLC log see why
+// ("p95 |deviation| 0.84 mm (U 0.020 mm) > tolerance 0.50 mm"). VerdictSettings is the one
+// owner of the tolerances and of the decision rule: the deviation and springback stages measure
+// (and give U), only the verdict judges, and the report copies its decisions
+// (verdict_proto.hpp), per bend and per flange too.
 //
-// Rules (each one that fails adds a reason; the part passes when there is none):
-//   surface   the p95 or the maximum of |signed deviation| (selectable) <= tolerance_mm;
-//             no deviation computed at all fails;
+// Each characteristic is judged by the decision rule (conformity.hpp): under GUARD_BAND (the
+// default, ISO 14253-1) CONFORMING when |v| <= T - U, NONCONFORMING when |v| > T + U, else
+// UNDECIDED; under SIMPLE the value alone. Characteristics (each one not conforming adds a
+// reason):
+//   surface   the p95 or the maximum of |signed deviation| (selectable) <= tolerance, with the U
+//             of that statistic; no deviation computed at all fails the part;
 //   bends     |springback_deg| <= the bend's limit (angle_tolerance_deg_by_bend, else
-//             angle_tolerance_deg); a bend that could not be measured fails when
-//             fail_unmeasured_bends;
+//             angle_tolerance_deg), U springback_uncertainty_deg; a measurable bend that could
+//             not be measured is UNDECIDED (never a silent pass), and fails the part only when
+//             fail_unmeasured_bends; a closed hem (not measurable) is not judged;
 //   shape     (each off at 0) per bend the spread of its angle along the bend <=
-//             max_angle_spread_deg; per flange its flatness <= max_flatness_mm and, when it is
+//             max_angle_spread_deg (U: the root sum of squares of the U of the two stations
+//             that span it); per flange its flatness <= max_flatness_mm and, when it is
 //             curled, |curl radius| >= min_curl_radius_mm; each measured trim edge (an end
 //             flange's free edge, a side edge) within max_edge_deviation_mm of the CAD edge,
 //             in-plane and across;
@@ -20,7 +27,11 @@
 //             was computed), and the global fit's residual rms to the surface (the trimmed
 //             deviation rms; not rms_final, which grows with the sample spacing) <=
 //             max_fit_rms_mm, and the orientation is not ambiguous (global_fit.ambiguous):
-//             otherwise the numbers above cannot be trusted.
+//             otherwise the numbers above cannot be trusted, and the part fails. These are not
+//             measurements against a tolerance; the decision rule does not apply to them.
+// The part: FAIL when any characteristic is NONCONFORMING or a rule fails the part outright
+// (health, no deviation, fail_unmeasured_bends), else UNDECIDED when any is UNDECIDED, else
+// PASS. `pass` is true only for PASS.
 //
 // Thread safety: pure function.
 
@@ -31,6 +42,7 @@
 #include <vector>
 
 #include "analysis/deviation/deviation.hpp"
+#include "analysis/inspection/conformity.hpp"
 #include "analysis/springback/springback.hpp"
 
 namespace springscan::analysis {
@@ -45,21 +57,25 @@ struct VerdictSettings {
   double angle_tolerance_deg = 1.0;                                   ///< springback limit per bend
   std::map<int, double> angle_tolerance_deg_by_bend{};                ///< bend id -> its own limit
   DeviationStatistic deviation_statistic = DeviationStatistic::kP95;  ///< what is compared
-  double min_coverage = 0.9;           ///< least share of the reduced model with a field vector
-  double max_fit_rms_mm = 1.0;         ///< largest global fit residual rms (scan to surface)
-                                       ///< that still counts as a good fit
-  bool fail_unmeasured_bends = true;   ///< a bend without a measurement fails the part
+  double min_coverage = 0.9;    ///< least share of the reduced model with a field vector
+  double max_fit_rms_mm = 1.0;  ///< largest global fit residual rms (scan to surface)
+                                ///< that still counts as a good fit
+  /// A measurable bend without a measurement is UNDECIDED either way; true also fails the
+  /// part (a line that scraps rather than re-measures), false leaves the part UNDECIDED.
+  bool fail_unmeasured_bends = false;
   double max_angle_spread_deg = 0.0;   ///< bend angle max - min along a bend; 0: not checked
   double min_curl_radius_mm = 0.0;     ///< least |curl radius| of a curled flange; 0: not checked
   double max_flatness_mm = 0.0;        ///< largest flange flatness (max distance); 0: not checked
   double max_edge_deviation_mm = 0.0;  ///< largest |move| of a trim edge; 0: not checked
+  DecisionRule decision_rule = DecisionRule::kGuardBand;  ///< how a value meets its limit
 };
 
 /// One measured trim edge of a flange (springback stage, FlangeFit::trim_edges).
 struct EdgeSummary {
-  std::string kind;          ///< "free" or "side" (edge_kind_name), for the reason
-  double in_plane_mm = 0.0;  ///< its in-plane move of largest magnitude (signed)
-  double across_mm = 0.0;    ///< its move across of largest magnitude (signed)
+  std::string kind;             ///< "free" or "side" (edge_kind_name), for the reason
+  double in_plane_mm = 0.0;     ///< its in-plane move of largest magnitude (signed)
+  double across_mm = 0.0;       ///< its move across of largest magnitude (signed)
+  double uncertainty_mm = 0.0;  ///< expanded U (k = 2) of the larger of the two
 };
 
 /// What the shape rules need of one flange (springback stage, FlangeFit::shape).
@@ -68,8 +84,10 @@ struct FlangeShapeSummary {
   bool measured = false;
   double flatness_mm = 0.0;  ///< max distance from its plane
   bool curled = false;
-  double curl_radius_mm = 0.0;       ///< signed; meaningful when curled
-  std::vector<EdgeSummary> edges{};  ///< its measured trim edges
+  double curl_radius_mm = 0.0;              ///< signed; meaningful when curled
+  double flatness_uncertainty_mm = 0.0;     ///< expanded U (k = 2) of flatness_mm
+  double curl_radius_uncertainty_mm = 0.0;  ///< expanded U (k = 2) of curl_radius_mm
+  std::vector<EdgeSummary> edges{};         ///< its measured trim edges
 };
 
 /// How much of the reduced model the deformation field covers (matching stage).
@@ -97,21 +115,35 @@ struct VerdictInput {
 struct BendVerdict {
   int bend_id = -1;
   double angle_tolerance_deg = 0.0;  ///< the limit applied
-  bool pass = false;                 ///< measured and |springback| <= angle_tolerance_deg
+  /// decision CONFORMING, or a closed hem (not judged): the report's and the PLC's bend pass.
+  bool pass = false;
+  Conformity decision = Conformity::kNotJudged;         ///< |springback| against its limit
+  Conformity spread_decision = Conformity::kNotJudged;  ///< angle spread (max_angle_spread_deg)
+};
+
+/// The shape decision on one flange: the worst of its flatness, curl and trim edges.
+struct FlangeVerdict {
+  int flange_id = -1;
+  Conformity shape_decision = Conformity::kNotJudged;  ///< not judged: no shape limit applies
 };
 
 struct VerdictResult {
-  bool pass = false;                       ///< no rule failed
-  std::vector<std::string> reasons{};      ///< one per failing rule, with its numbers
-  double tolerance_mm = 0.0;               ///< the surface limit applied
+  PartDecision decision = PartDecision::kFail;            ///< see the header comment
+  bool pass = false;                                      ///< decision == kPass
+  DecisionRule decision_rule = DecisionRule::kGuardBand;  ///< the rule that decided
+  std::vector<std::string> reasons{};  ///< one per characteristic not conforming, per failed rule
+  double tolerance_mm = 0.0;           ///< the surface limit applied
   double fraction_out_of_tolerance = 0.0;  ///< share of signed_distance_mm with |d| > limit
-  std::vector<BendVerdict> bends{};        ///< one per input bend, in the same order
+  Conformity surface_decision = Conformity::kNotJudged;  ///< not judged: no deviation computed
+  double surface_uncertainty_mm = 0.0;   ///< U of the statistic the surface criterion uses
+  std::vector<BendVerdict> bends{};      ///< one per input bend, in the same order
+  std::vector<FlangeVerdict> flanges{};  ///< one per input flange, in the same order
 };
 
 /// The shape summaries of the springback stage's flanges.
 std::vector<FlangeShapeSummary> flange_shapes(const std::vector<FlangeFit>& flanges);
 
-/// Decides pass/fail from the stage results.
+/// Decides PASS, FAIL or UNDECIDED from the stage results.
 VerdictResult decide_verdict(const VerdictInput& input, const VerdictSettings& settings = {});
 
 }  // namespace springscan::analysis

@@ -30,6 +30,37 @@ std::optional<Error> check_shape_limit(const std::string& field, double value) {
   return bad(field, value, "0 (off) to 1e6");
 }
 
+v1::VerdictSettings::DecisionRule proto_rule(DecisionRule rule) {
+  return rule == DecisionRule::kSimple ? v1::VerdictSettings::SIMPLE
+                                       : v1::VerdictSettings::GUARD_BAND;
+}
+
+v1::Conformity proto_conformity(Conformity c) {
+  switch (c) {
+    case Conformity::kConforming:
+      return v1::CONFORMING;
+    case Conformity::kNonconforming:
+      return v1::NONCONFORMING;
+    case Conformity::kUndecided:
+      return v1::UNDECIDED;
+    case Conformity::kNotJudged:
+      break;
+  }
+  return v1::CONFORMITY_UNSPECIFIED;
+}
+
+v1::Verdict::Decision proto_decision(PartDecision d) {
+  switch (d) {
+    case PartDecision::kPass:
+      return v1::Verdict::PASS;
+    case PartDecision::kFail:
+      return v1::Verdict::FAIL;
+    case PartDecision::kUndecided:
+      break;
+  }
+  return v1::Verdict::UNDECIDED;
+}
+
 }  // namespace
 
 Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
@@ -48,6 +79,11 @@ Expected<VerdictSettings> from_proto(const v1::VerdictSettings& m) {
     s.deviation_statistic = DeviationStatistic::kMax;
   } else if (m.has_deviation_statistic() && m.deviation_statistic() == v1::VerdictSettings::P95) {
     s.deviation_statistic = DeviationStatistic::kP95;
+  }
+  if (m.has_decision_rule() && m.decision_rule() == v1::VerdictSettings::SIMPLE) {
+    s.decision_rule = DecisionRule::kSimple;
+  } else if (m.has_decision_rule() && m.decision_rule() == v1::VerdictSettings::GUARD_BAND) {
+    s.decision_rule = DecisionRule::kGuardBand;
   }
   if (m.has_min_coverage()) {
     if (!(m.min_coverage() >= 0.0 && m.min_coverage() <= 1.0)) {
@@ -105,20 +141,33 @@ void to_proto(const VerdictSettings& s, v1::VerdictSettings* m) {
   m->set_min_curl_radius_mm(s.min_curl_radius_mm);
   m->set_max_flatness_mm(s.max_flatness_mm);
   m->set_max_edge_deviation_mm(s.max_edge_deviation_mm);
+  m->set_decision_rule(proto_rule(s.decision_rule));
 }
 
 void to_proto(const VerdictResult& verdict, v1::InspectionReport* report) {
   v1::Verdict& out = *report->mutable_verdict();
   out.set_pass(verdict.pass);
+  out.set_decision(proto_decision(verdict.decision));
+  out.set_decision_rule(proto_rule(verdict.decision_rule));
   out.clear_reasons();
   for (const std::string& reason : verdict.reasons) out.add_reasons(reason);
-  report->mutable_deviation()->set_tolerance_mm(verdict.tolerance_mm);
-  report->mutable_deviation()->set_fraction_out_of_tolerance(verdict.fraction_out_of_tolerance);
+  v1::Deviation& deviation = *report->mutable_deviation();
+  deviation.set_tolerance_mm(verdict.tolerance_mm);
+  deviation.set_fraction_out_of_tolerance(verdict.fraction_out_of_tolerance);
+  deviation.set_uncertainty_mm(verdict.surface_uncertainty_mm);
+  deviation.set_decision(proto_conformity(verdict.surface_decision));
   for (const BendVerdict& decided : verdict.bends) {
     for (v1::Bend& bend : *report->mutable_bends()) {
       if (bend.id() != decided.bend_id) continue;
       bend.set_angle_tolerance_deg(decided.angle_tolerance_deg);
       bend.set_pass(decided.pass);
+      bend.set_decision(proto_conformity(decided.decision));
+    }
+  }
+  for (const FlangeVerdict& decided : verdict.flanges) {
+    for (v1::Segment& segment : *report->mutable_segments()) {
+      if (segment.id() == decided.flange_id)
+        segment.set_shape_decision(proto_conformity(decided.shape_decision));
     }
   }
 }

@@ -41,9 +41,14 @@ bool has_reason(const VerdictResult& v, const std::string& text) {
 TEST(Verdict, GoodPartPasses) {
   const auto v = decide_verdict(good_input());
   EXPECT_TRUE(v.pass);
+  EXPECT_EQ(v.decision, PartDecision::kPass);
+  EXPECT_EQ(v.decision_rule, DecisionRule::kGuardBand) << "the guard band by default";
+  EXPECT_EQ(v.surface_decision, Conformity::kConforming);
   EXPECT_EQ(v.reasons.size(), 0u);
   ASSERT_EQ(v.bends.size(), 2u);
   EXPECT_TRUE(v.bends[0].pass && v.bends[1].pass);
+  EXPECT_EQ(v.bends[0].decision, Conformity::kConforming);
+  EXPECT_EQ(v.bends[0].spread_decision, Conformity::kNotJudged);
   EXPECT_EQ(v.bends[1].bend_id, 1);
   EXPECT_EQ(v.bends[1].angle_tolerance_deg, 1.0);
 }
@@ -54,14 +59,16 @@ TEST(Verdict, SurfaceDeviationByP95OrMax) {
   auto v = decide_verdict(in);
   EXPECT_FALSE(v.pass);
   ASSERT_EQ(v.reasons.size(), 1u);
-  EXPECT_EQ(v.reasons[0], "p95 |deviation| 0.84 mm > tolerance 0.50 mm");
+  EXPECT_EQ(v.reasons[0], "p95 |deviation| 0.84 mm (U 0.000 mm) > tolerance 0.50 mm");
+  EXPECT_EQ(v.decision, PartDecision::kFail);
+  EXPECT_EQ(v.surface_decision, Conformity::kNonconforming);
 
   in = good_input();  // p95 fine, but one point is 0.61 mm off: only MAX sees it
   in.deviation.min_mm = -0.61;
   EXPECT_TRUE(decide_verdict(in).pass);
   v = decide_verdict(in, {.deviation_statistic = DeviationStatistic::kMax});
   EXPECT_FALSE(v.pass);
-  EXPECT_TRUE(has_reason(v, "max |deviation| 0.61 mm > tolerance 0.50 mm"));
+  EXPECT_TRUE(has_reason(v, "max |deviation| 0.61 mm (U 0.000 mm) > tolerance 0.50 mm"));
   EXPECT_TRUE(
       decide_verdict(in, {.tolerance_mm = 0.7, .deviation_statistic = DeviationStatistic::kMax})
           .pass);
@@ -69,9 +76,14 @@ TEST(Verdict, SurfaceDeviationByP95OrMax) {
   in = good_input();
   in.deviation.points = 0;
   EXPECT_TRUE(has_reason(decide_verdict(in), "no surface deviation"));
+  EXPECT_EQ(decide_verdict(in).decision, PartDecision::kFail);
   in = good_input();
   in.deviation.p95_mm = std::numeric_limits<double>::quiet_NaN();
   EXPECT_FALSE(decide_verdict(in).pass);
+  EXPECT_EQ(decide_verdict(in).decision, PartDecision::kUndecided) << "cannot be placed";
+  EXPECT_EQ(decide_verdict(in, {.decision_rule = DecisionRule::kSimple}).decision,
+            PartDecision::kFail)
+      << "SIMPLE fails a value it cannot compare, as before";
 }
 
 // The share out of tolerance is judged against the verdict's tolerance, the one the report shows.
@@ -96,8 +108,8 @@ TEST(Verdict, SpringbackPerBend) {
   auto v = decide_verdict(in);
   ASSERT_EQ(v.reasons.size(), 1u);
   EXPECT_EQ(v.reasons[0],
-            "bend 1 springback -2.31 deg (nominal 90.00, measured 92.31) exceeds tolerance "
-            "1.00 deg");
+            "bend 1 springback -2.31 deg (U 0.000; nominal 90.00, measured 92.31) exceeds "
+            "tolerance 1.00 deg");
   EXPECT_TRUE(v.bends[0].pass);
   EXPECT_FALSE(v.bends[1].pass);
   EXPECT_TRUE(decide_verdict(in, {.angle_tolerance_deg = 2.5}).pass);
@@ -106,15 +118,35 @@ TEST(Verdict, SpringbackPerBend) {
   EXPECT_TRUE(v.pass);
   EXPECT_EQ(v.bends[1].angle_tolerance_deg, 3.0);
   EXPECT_EQ(v.bends[0].angle_tolerance_deg, 1.0);
+}
 
+// An unmeasured bend is UNDECIDED, under either rule: never a silent pass. It fails the part
+// only when the line asks for it (fail_unmeasured_bends); a closed hem is not judged.
+TEST(Verdict, AnUnmeasuredBendIsUndecided) {
+  auto in = good_input();
+  in.bends[0].measured = false;
+  in.bends[0].status = "bend 0 not measured: flange 1: 12 points";
+  for (const DecisionRule rule : {DecisionRule::kGuardBand, DecisionRule::kSimple}) {
+    auto v = decide_verdict(in, {.decision_rule = rule});
+    EXPECT_EQ(v.decision, PartDecision::kUndecided) << to_string(rule);
+    EXPECT_FALSE(v.pass);
+    EXPECT_FALSE(v.bends[0].pass);
+    EXPECT_EQ(v.bends[0].decision, Conformity::kUndecided);
+    EXPECT_EQ(v.bends[1].decision, Conformity::kConforming);
+    ASSERT_EQ(v.reasons.size(), 1u);
+    EXPECT_EQ(v.reasons[0], "bend 0 not measured: flange 1: 12 points (undecided)");
+    v = decide_verdict(in, {.fail_unmeasured_bends = true, .decision_rule = rule});
+    EXPECT_EQ(v.decision, PartDecision::kFail);
+    EXPECT_EQ(v.bends[0].decision, Conformity::kUndecided) << "the bend itself is not known";
+    EXPECT_TRUE(has_reason(v, "(fails the part: fail_unmeasured_bends)"));
+  }
   in = good_input();
   in.bends[0].measured = false;
-  v = decide_verdict(in);
-  EXPECT_TRUE(has_reason(v, "bend 0 not measured"));
-  EXPECT_FALSE(v.bends[0].pass);  // an unmeasured bend never passes ...
-  v = decide_verdict(in, {.fail_unmeasured_bends = false});
-  EXPECT_TRUE(v.pass);  // ... but need not fail the part
-  EXPECT_FALSE(v.bends[0].pass);
+  in.bends[0].measurable = false;  // a closed hem
+  const auto v = decide_verdict(in);
+  EXPECT_EQ(v.decision, PartDecision::kPass);
+  EXPECT_TRUE(v.bends[0].pass);
+  EXPECT_EQ(v.bends[0].decision, Conformity::kNotJudged);
 }
 
 TEST(Verdict, AnalysisHealth) {
@@ -178,9 +210,15 @@ TEST(Verdict, ShapeRulesAreOffByDefaultAndNameTheirNumbers) {
   s.max_flatness_mm = 1.0;
   const auto v = decide_verdict(in, s);
   EXPECT_FALSE(v.pass);
-  EXPECT_TRUE(has_reason(v, "bend 1 angle spread along the bend 0.80 deg (89.50 to 90.30)"));
-  EXPECT_TRUE(has_reason(v, "flange 1 flatness 1.40 mm exceeds 1.00 mm"));
-  EXPECT_TRUE(has_reason(v, "flange 1 curl radius -180.00 mm is tighter than 250.00 mm"));
+  EXPECT_TRUE(
+      has_reason(v, "bend 1 angle spread along the bend 0.80 deg (U 0.000; 89.50 to 90.30)"));
+  EXPECT_TRUE(has_reason(v, "flange 1 flatness 1.40 mm (U 0.000 mm) exceeds 1.00 mm"));
+  EXPECT_TRUE(
+      has_reason(v, "flange 1 curl radius -180.00 mm (U 0.000 mm) is tighter than 250.00 mm"));
+  ASSERT_EQ(v.flanges.size(), 2u);
+  EXPECT_EQ(v.flanges[0].shape_decision, Conformity::kConforming);
+  EXPECT_EQ(v.flanges[1].shape_decision, Conformity::kNonconforming);
+  EXPECT_EQ(v.bends[1].spread_decision, Conformity::kNonconforming);
   EXPECT_FALSE(has_reason(v, "flange 0"));
   EXPECT_FALSE(has_reason(v, "bend 0 angle spread"));
   EXPECT_TRUE(v.bends[1].pass) << "the bend's own pass is its springback";
@@ -189,21 +227,160 @@ TEST(Verdict, ShapeRulesAreOffByDefaultAndNameTheirNumbers) {
   EXPECT_FALSE(has_reason(decide_verdict(in, s), "free edge"));
   VerdictSettings edge;
   edge.max_edge_deviation_mm = 0.5;
-  EXPECT_TRUE(
-      has_reason(decide_verdict(in, edge),
-                 "flange 0 free edge off by 0.31 mm in-plane, -0.52 mm across (limit 0.50 mm)"));
+  EXPECT_TRUE(has_reason(decide_verdict(in, edge),
+                         "flange 0 free edge off by 0.31 mm in-plane, -0.52 mm across (U 0.000 mm; "
+                         "limit 0.50 mm)"));
   EXPECT_FALSE(has_reason(decide_verdict(in, edge), "side edge"));
   edge.max_edge_deviation_mm = 0.6;
   EXPECT_TRUE(decide_verdict(in, edge).pass);
   edge.max_edge_deviation_mm = 0.15;
-  EXPECT_TRUE(
-      has_reason(decide_verdict(in, edge),
-                 "flange 0 side edge off by -0.12 mm in-plane, 0.20 mm across (limit 0.15 mm)"));
+  EXPECT_TRUE(has_reason(decide_verdict(in, edge),
+                         "flange 0 side edge off by -0.12 mm in-plane, 0.20 mm across (U 0.000 mm; "
+                         "limit 0.15 mm)"));
   // Within the limits: no reason.
   s.max_angle_spread_deg = 0.9;
   s.min_curl_radius_mm = 150.0;
   s.max_flatness_mm = 1.5;
   EXPECT_TRUE(decide_verdict(in, s).pass);
+}
+
+// The guard band per bend: a springback within U of its limit is UNDECIDED, and so is the part
+// when nothing fails; a bend far inside its limit still passes with its U. The reason names the
+// value, U and the limit.
+TEST(Verdict, ABendWithinUOfItsLimitIsUndecided) {
+  auto in = good_input();
+  in.bends[0].springback_uncertainty_deg = 0.05;  // 0.4 deg: far inside 1.0
+  in.bends[1].springback_deg = 0.98;
+  in.bends[1].measured_angle_deg = 89.02;
+  in.bends[1].springback_uncertainty_deg = 0.1;
+  auto v = decide_verdict(in);
+  EXPECT_EQ(v.decision, PartDecision::kUndecided);
+  EXPECT_FALSE(v.pass) << "pass only for PASS";
+  EXPECT_EQ(v.bends[0].decision, Conformity::kConforming);
+  EXPECT_TRUE(v.bends[0].pass);
+  EXPECT_EQ(v.bends[1].decision, Conformity::kUndecided);
+  EXPECT_FALSE(v.bends[1].pass);
+  ASSERT_EQ(v.reasons.size(), 1u);
+  EXPECT_EQ(v.reasons[0],
+            "bend 1 springback 0.98 deg (U 0.100; nominal 90.00, measured 89.02) undecided, "
+            "within U of tolerance 1.00 deg");
+  // SIMPLE compares the value alone, and the result says which rule decided.
+  v = decide_verdict(in, {.decision_rule = DecisionRule::kSimple});
+  EXPECT_EQ(v.decision, PartDecision::kPass);
+  EXPECT_EQ(v.decision_rule, DecisionRule::kSimple);
+  // Out by more than U: FAIL, and a FAIL anywhere outranks an undecided bend.
+  in.bends[0].springback_deg = -1.2;
+  v = decide_verdict(in);
+  EXPECT_EQ(v.decision, PartDecision::kFail);
+  EXPECT_EQ(v.bends[0].decision, Conformity::kNonconforming);
+  EXPECT_EQ(v.bends[1].decision, Conformity::kUndecided);
+  EXPECT_EQ(v.reasons.size(), 2u);
+  // Out by less than U: undecided, never a FAIL the scan cannot prove.
+  in.bends[0].springback_deg = -1.04;
+  EXPECT_EQ(decide_verdict(in).bends[0].decision, Conformity::kUndecided);
+  // A health failure fails the part whatever the characteristics say.
+  in = good_input();
+  in.bends[1].springback_deg = 0.98;
+  in.bends[1].springback_uncertainty_deg = 0.1;
+  in.orientation_ambiguous = true;
+  EXPECT_EQ(decide_verdict(in).decision, PartDecision::kFail);
+}
+
+TEST(Verdict, TheSurfaceUsesTheUOfTheStatisticItCompares) {
+  auto in = good_input();
+  in.deviation.p95_mm = 0.47;
+  in.deviation.p95_uncertainty_mm = 0.05;
+  in.deviation.max_mm = 0.62;
+  in.deviation.max_uncertainty_mm = 0.08;
+  auto v = decide_verdict(in);
+  EXPECT_EQ(v.surface_decision, Conformity::kUndecided);
+  EXPECT_EQ(v.surface_uncertainty_mm, 0.05);
+  EXPECT_EQ(v.decision, PartDecision::kUndecided);
+  EXPECT_TRUE(
+      has_reason(v, "p95 |deviation| 0.47 mm (U 0.050 mm) undecided, within U of tolerance"));
+  v = decide_verdict(in, {.deviation_statistic = DeviationStatistic::kMax});
+  EXPECT_EQ(v.surface_uncertainty_mm, 0.08);
+  EXPECT_EQ(v.surface_decision, Conformity::kNonconforming);  // 0.62 > 0.5 + 0.08
+  in.deviation.p95_uncertainty_mm = 0.02;
+  EXPECT_EQ(decide_verdict(in).decision, PartDecision::kPass);  // 0.47 <= 0.5 - 0.02
+}
+
+// The shape criteria with their own U: flatness and edges against an upper limit, the curl
+// radius against a lower one, the angle spread with the U of the two stations that span it.
+TEST(Verdict, ShapeCriteriaUseTheirUncertainties) {
+  VerdictInput in = good_input();
+  in.bends[1].stations = {{-20, 89.5, 0.5, 0.03}, {0, 89.6, 0.4, 0.01}, {20, 90.3, -0.3, 0.04}};
+  in.bends[1].angle_min_deg = 89.5;
+  in.bends[1].angle_max_deg = 90.3;
+  in.bends[1].angle_spread_deg = 0.8;
+  in.flanges = {{.flange_id = 0,
+                 .measured = true,
+                 .flatness_mm = 0.95,
+                 .curled = true,
+                 .curl_radius_mm = -240.0,
+                 .flatness_uncertainty_mm = 0.1,
+                 .curl_radius_uncertainty_mm = 30.0,
+                 .edges = {{"free", 0.31, -0.52, 0.05}}}};
+  VerdictSettings s{.max_angle_spread_deg = 0.78,
+                    .min_curl_radius_mm = 250.0,
+                    .max_flatness_mm = 1.0,
+                    .max_edge_deviation_mm = 0.5};
+  auto v = decide_verdict(in, s);
+  // Spread 0.8 against 0.78 with U hypot(0.03, 0.04) = 0.05: undecided.
+  EXPECT_EQ(v.bends[1].spread_decision, Conformity::kUndecided);
+  EXPECT_TRUE(has_reason(v, "bend 1 angle spread along the bend 0.80 deg (U 0.050;"));
+  EXPECT_EQ(v.bends[1].decision, Conformity::kConforming) << "its springback is its own";
+  ASSERT_EQ(v.flanges.size(), 1u);
+  EXPECT_EQ(v.flanges[0].shape_decision, Conformity::kUndecided);
+  EXPECT_TRUE(has_reason(v, "flange 0 flatness 0.95 mm (U 0.100 mm) undecided"));
+  EXPECT_TRUE(has_reason(v, "flange 0 curl radius -240.00 mm (U 30.000 mm) undecided"));
+  EXPECT_TRUE(has_reason(v,
+                         "flange 0 free edge off by 0.31 mm in-plane, -0.52 mm across "
+                         "(U 0.050 mm; undecided, within U of 0.50 mm)"));
+  EXPECT_EQ(v.decision, PartDecision::kUndecided);
+  // Tighter limits put each beyond its U: nonconforming.
+  s.max_angle_spread_deg = 0.7;
+  s.max_flatness_mm = 0.8;
+  v = decide_verdict(in, s);
+  EXPECT_EQ(v.bends[1].spread_decision, Conformity::kNonconforming);
+  EXPECT_EQ(v.flanges[0].shape_decision, Conformity::kNonconforming);
+  EXPECT_EQ(v.decision, PartDecision::kFail);
+  // Looser ones put each inside by more than its U: conforming.
+  s = {.max_angle_spread_deg = 0.9,
+       .min_curl_radius_mm = 200.0,
+       .max_flatness_mm = 1.1,
+       .max_edge_deviation_mm = 0.6};
+  v = decide_verdict(in, s);
+  EXPECT_EQ(v.flanges[0].shape_decision, Conformity::kConforming);
+  EXPECT_EQ(v.decision, PartDecision::kPass) << testing::PrintToString(v.reasons);
+}
+
+// Parts with one borderline bend (true springback within +-0.1 deg of its 1.0 deg tolerance)
+// and one far inside, measured with errors within U, good and poor views: the part is never
+// PASS when a true value is out of tolerance, never FAIL when all are within it.
+TEST(Verdict, NeverAFalsePartDecisionOnBorderlineParts) {
+  int pass = 0, fail = 0, undecided = 0;
+  for (const double u : {0.01, 0.05, 0.15}) {
+    for (int t = -10; t <= 10; ++t) {
+      const double truth = 1.0 + 0.01 * t;
+      for (int e = -2; e <= 2; ++e) {
+        auto in = good_input();
+        in.bends[0].springback_uncertainty_deg = 0.02;
+        in.bends[1].springback_deg = truth + u * e / 2.0;
+        in.bends[1].springback_uncertainty_deg = u;
+        const auto v = decide_verdict(in);
+        const bool good = truth <= 1.0;  // bend 0 (0.4 deg) is always within
+        EXPECT_FALSE(v.decision == PartDecision::kPass && !good) << truth << " U " << u;
+        EXPECT_FALSE(v.decision == PartDecision::kFail && good) << truth << " U " << u;
+        pass += v.decision == PartDecision::kPass;
+        fail += v.decision == PartDecision::kFail;
+        undecided += v.decision == PartDecision::kUndecided;
+      }
+    }
+  }
+  EXPECT_GT(pass, 0);
+  EXPECT_GT(fail, 0);
+  EXPECT_GT(undecided, 0);
 }
 
 }  // namespace

@@ -143,6 +143,9 @@ TEST(SettingsProto, ShapeSettingsOverrideAndAreChecked) {
   EXPECT_EQ(defaults->max_flatness_mm, 0.0);
   EXPECT_EQ(defaults->max_edge_deviation_mm, 0.0);
   EXPECT_TRUE(verdict_settings_from_proto(parse("verdict { max_flatness_mm: 0 }")));
+  EXPECT_EQ(defaults->decision_rule, DecisionRule::kGuardBand);
+  EXPECT_EQ(verdict_settings_from_proto(parse("verdict { decision_rule: SIMPLE }"))->decision_rule,
+            DecisionRule::kSimple);
   EXPECT_NE(verdict_settings_from_proto(parse("verdict { min_curl_radius_mm: -1 }"))
                 .message()
                 .find("verdict.min_curl_radius_mm = -1"),

@@ -44,5 +44,61 @@ TEST(VerdictProto, SettingsRoundTrip) {
   EXPECT_EQ(back->max_fit_rms_mm, 0.4);
 }
 
+// Every decision and the rule that made them reach the report: the part's, the surface's with
+// the U it was judged with, each bend's and each flange's (matched by id).
+TEST(VerdictProto, DecisionsAndTheRuleAreCopiedIntoTheReport) {
+  VerdictResult verdict;
+  verdict.decision = PartDecision::kUndecided;
+  verdict.decision_rule = DecisionRule::kGuardBand;
+  verdict.surface_decision = Conformity::kConforming;
+  verdict.surface_uncertainty_mm = 0.04;
+  verdict.bends = {{.bend_id = 2, .decision = Conformity::kUndecided},
+                   {.bend_id = 3, .pass = true, .decision = Conformity::kConforming},
+                   {.bend_id = 5, .pass = true}};  // a closed hem: not judged
+  verdict.flanges = {{.flange_id = 1, .shape_decision = Conformity::kNonconforming}};
+  v1::InspectionReport report;
+  for (const int id : {5, 3, 2}) report.add_bends()->set_id(id);
+  for (const int id : {0, 1}) report.add_segments()->set_id(id);
+  to_proto(verdict, &report);
+  EXPECT_FALSE(report.verdict().pass());
+  EXPECT_EQ(report.verdict().decision(), v1::Verdict::UNDECIDED);
+  EXPECT_EQ(report.verdict().decision_rule(), v1::VerdictSettings::GUARD_BAND);
+  EXPECT_EQ(report.deviation().decision(), v1::CONFORMING);
+  EXPECT_EQ(report.deviation().uncertainty_mm(), 0.04);
+  EXPECT_EQ(report.bends(0).decision(), v1::CONFORMITY_UNSPECIFIED);
+  EXPECT_EQ(report.bends(1).decision(), v1::CONFORMING);
+  EXPECT_EQ(report.bends(2).decision(), v1::UNDECIDED);
+  EXPECT_EQ(report.segments(0).shape_decision(), v1::CONFORMITY_UNSPECIFIED);
+  EXPECT_EQ(report.segments(1).shape_decision(), v1::NONCONFORMING);
+  verdict.decision = PartDecision::kPass;
+  verdict.pass = true;
+  verdict.decision_rule = DecisionRule::kSimple;
+  to_proto(verdict, &report);
+  EXPECT_TRUE(report.verdict().pass());
+  EXPECT_EQ(report.verdict().decision(), v1::Verdict::PASS);
+  EXPECT_EQ(report.verdict().decision_rule(), v1::VerdictSettings::SIMPLE);
+  verdict.decision = PartDecision::kFail;
+  to_proto(verdict, &report);
+  EXPECT_EQ(report.verdict().decision(), v1::Verdict::FAIL);
+}
+
+TEST(VerdictProto, TheDecisionRuleIsReadWithGuardBandByDefault) {
+  v1::VerdictSettings m;
+  auto s = from_proto(m);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(s->decision_rule, DecisionRule::kGuardBand);
+  m.set_decision_rule(v1::VerdictSettings::SIMPLE);
+  s = from_proto(m);
+  ASSERT_TRUE(s) << s.message();
+  EXPECT_EQ(s->decision_rule, DecisionRule::kSimple);
+  m.set_decision_rule(v1::VerdictSettings::DECISION_RULE_UNSPECIFIED);
+  EXPECT_EQ(from_proto(m)->decision_rule, DecisionRule::kGuardBand);
+  v1::VerdictSettings out;
+  to_proto(VerdictSettings{.decision_rule = DecisionRule::kSimple}, &out);
+  EXPECT_EQ(out.decision_rule(), v1::VerdictSettings::SIMPLE);
+  to_proto(VerdictSettings{}, &out);
+  EXPECT_EQ(out.decision_rule(), v1::VerdictSettings::GUARD_BAND);
+}
+
 }  // namespace
 }  // namespace springscan::analysis
