@@ -33,6 +33,7 @@ int trend_main(int argc, char** argv) {
   if (args.has("title")) info.title = args.get("title");
   info.sources = args.positionals();
   info.reports = input->reports.size();
+  info.decisions = report::decision_counts(input->reports);
   info.skipped = input->skipped.size();
   info.first_utc = input->reports.front().created_utc();
   info.last_utc = input->reports.back().created_utc();

@@ -248,12 +248,15 @@ void JobRunner::run(const RunnerJob& job) {
     post(finish(job, report_only(std::move(report)), end));
     return;
   }
-  const bool pass = outcome->report.verdict().pass();
+  const v1::Verdict& decided = outcome->report.verdict();
+  const bool pass = decided.pass();
+  const bool undecided = decided.decision() == v1::Verdict::UNDECIDED;
   const auto code = pass                                       ? regs::ResultCode::kOk
                     : outcome->report.global_fit().ambiguous() ? regs::ResultCode::kAmbiguous
+                    : undecided                                ? regs::ResultCode::kUndecided
                                                                : regs::ResultCode::kFormNok;
   JobEnd end{code, pass, false, regs::ErrorCode::kNone, regs::ErrorDetail::kNone};
-  std::string verdict = pass ? "PASS" : "FAIL";
+  std::string verdict = pass ? "PASS" : undecided ? "UNDECIDED" : "FAIL";
   for (const auto& reason : outcome->report.verdict().reasons()) verdict += "; " + reason;
   log_.info(name + ": " + verdict);
   std::optional<v1::CheckResult> check = check_part(job, outcome->report);

@@ -28,19 +28,20 @@ h2{font-size:1em;margin:.1em 0 .6em;text-transform:uppercase;letter-spacing:.05e
  background:#ffe08a}
 #verdict{font-size:5em;font-weight:800;line-height:1;letter-spacing:.04em;margin:.1em 0}
 #verdict.pass{color:#1b7f3b}#verdict.fail{color:#c62828}#verdict.none{color:#b26a00}
+#verdict.undecided{color:#8a4fbf}
 #last-meta{color:#555}
 #reasons{margin:.4em 0;padding-left:1.2em;color:#c62828;font-weight:600}
 table{border-collapse:collapse;width:100%;font-variant-numeric:tabular-nums}
 th,td{text-align:right;padding:.25em .5em;border-bottom:1px solid #e3e5e8}
 th:first-child,td:first-child{text-align:left}
-tr.bad td{color:#c62828;font-weight:600}
+tr.bad td{color:#c62828;font-weight:600}tr.undecided td{color:#8a4fbf;font-weight:600}
 #map{width:100%;height:auto;max-height:420px;object-fit:contain;background:#fff}
 .legend{font-size:.85em;color:#555}
 .wide{grid-column:1/-1}
 .counts{display:flex;gap:2em;flex-wrap:wrap}.counts div{font-size:.9em;color:#555}
 .counts b{display:block;font-size:1.8em;color:#1b1d21}
 #recent td.pass{color:#1b7f3b;font-weight:700}#recent td.fail{color:#c62828;font-weight:700}
-#recent td.none{color:#b26a00;font-weight:700}#recent th,#recent td{text-align:left}
+#recent td.none{color:#b26a00;font-weight:700}#recent td.undecided{color:#8a4fbf;font-weight:700}#recent th,#recent td{text-align:left}
 </style></head>
 <body>
 <header><h1>springscan <span id="station"></span></h1><span id="conn">connecting…</span></header>
@@ -49,7 +50,8 @@ tr.bad td{color:#c62828;font-weight:600}
 <div class="flags" id="flags"></div></section>
 <section><h2>Counts of the shift <span id="shift-start"></span></h2><div class="counts">
 <div><b id="count-parts">0</b>parts</div><div><b id="count-pass">0</b>pass</div>
-<div><b id="count-fail">0</b>fail</div><div><b id="count-none">0</b>no result</div>
+<div><b id="count-fail">0</b>fail</div><div><b id="count-undecided">0</b>undecided</div>
+<div><b id="count-none">0</b>no result</div>
 <div><b id="yield">–</b>yield</div></div></section>
 <section><h2>Last part</h2><div id="verdict" class="none">–</div><div id="last-meta">no result
 yet</div><div id="criteria"></div><ul id="reasons"></ul>
@@ -57,7 +59,8 @@ yet</div><div id="criteria"></div><ul id="reasons"></ul>
 <section><h2>Deviation colour map</h2><img id="map" alt="deviation colour map of the last part"
 hidden><p class="legend" id="legend"></p></section>
 <section class="wide"><h2>Bends</h2><table><thead><tr><th>Bend</th><th>Nominal °</th>
-<th>Measured °</th><th>Springback °</th><th>Tolerance ± °</th><th>Result</th></tr></thead>
+<th>Measured °</th><th>Springback °</th><th>U ± °</th><th>Tolerance ± °</th><th>Result</th></tr>
+</thead>
 <tbody id="bends"></tbody></table></section>
 <section class="wide"><h2>Last results</h2><table id="recent"><thead><tr><th>Seq</th>
 <th>Time</th><th>Job</th><th>Part</th><th>Verdict</th><th>Report</th></tr></thead>
@@ -68,7 +71,8 @@ hidden><p class="legend" id="legend"></p></section>
 const $ = (id) => document.getElementById(id);
 const STATES = {starting: 'Starting', idle: 'Idle', scanning: 'Scanning', analysing: 'Analysing',
   done: 'Idle – result ready', fault: 'Fault'};
-const VERDICT_CLASS = {PASS: 'pass', FAIL: 'fail'};
+const VERDICT_CLASS = {PASS: 'pass', FAIL: 'fail', UNDECIDED: 'undecided'};
+const BEND_RESULT = {CONFORMING: 'OK', NONCONFORMING: 'OUT', UNDECIDED: 'UNDECIDED'};
 const num = (v, d) => (typeof v === 'number' && isFinite(v)) ? v.toFixed(d) : 'n/a';
 function cell(tr, content, cls) {
   const td = document.createElement('td');
@@ -105,8 +109,11 @@ function renderLast(last) {
   v.dataset.seq = last.seq;
   $('last-meta').textContent = 'Result ' + last.seq + ' · job ' + last.job_id + ' · part ' +
       last.part_id + ' · ' + last.time + ' · cycle ' + num(last.cycle_time_ms / 1000, 1) + ' s';
+  // UNDECIDED: a value lies within its uncertainty U of its limit (docs/operator-page.md).
   $('criteria').textContent = last.verdict === 'PASS' ? 'All criteria met.' :
-      (last.reasons.length ? 'Failed criteria:' : '');
+      last.verdict === 'UNDECIDED' ?
+      'Cannot tell: within the measurement uncertainty of a limit. Re-measure once, then ' +
+      'check by hand:' : (last.reasons.length ? 'Failed criteria:' : '');
   // The reasons are the failed criteria; a part that passed has none to show.
   const failed = last.verdict === 'PASS' ? [] : last.reasons;
   $('reasons').replaceChildren(...failed.map((r) => {
@@ -120,20 +127,24 @@ function renderLast(last) {
     const d = last.deviation;
     $('legend').textContent = 'Green: within ±' + num(d.tolerance_mm, 2) + ' mm of the CAD; ' +
         'blue below, red above (full colour at ±' + num(d.color_scale_mm, 2) + ' mm). rms ' +
-        num(d.rms_mm, 3) + ' mm, p95 ' + num(d.p95_mm, 3) + ' mm.';
+        num(d.rms_mm, 3) + ' mm, p95 ' + num(d.p95_mm, 3) + ' mm' +
+        (d.uncertainty_mm > 0 ? ' (U ±' + num(d.uncertainty_mm, 3) + ' mm)' : '') + '.';
   } else {
     map.hidden = true; map.removeAttribute('src');
     $('legend').textContent = 'No deviation map: the part was not measured.';
   }
   $('bends').replaceChildren(...last.bends.map((b) => {
     const tr = document.createElement('tr');
-    if (!b.pass) tr.className = 'bad';
+    const undecided = b.decision === 'UNDECIDED';
+    if (!b.pass) tr.className = undecided ? 'undecided' : 'bad';
     cell(tr, 'B' + b.id);
     cell(tr, num(b.nominal_deg, 2));
     cell(tr, b.measured ? num(b.measured_deg, 2) : 'n/a');
     cell(tr, b.measured ? num(b.springback_deg, 2) : 'n/a');
+    cell(tr, b.measured ? num(b.springback_uncertainty_deg, 3) : 'n/a');
     cell(tr, num(b.tolerance_deg, 2));
-    cell(tr, !b.measured ? 'not measured' : (b.pass ? 'OK' : 'OUT'));
+    cell(tr, !b.measured ? 'not measured' + (undecided ? ' (UNDECIDED)' : '') :
+        (BEND_RESULT[b.decision] || (b.pass ? 'OK' : 'OUT')));
     return tr;
   }));
 }
@@ -152,6 +163,7 @@ function renderShift(shift) {
   $('count-parts').textContent = shift.parts;
   $('count-pass').textContent = shift.pass;
   $('count-fail').textContent = shift.fail;
+  $('count-undecided').textContent = shift.undecided;
   $('count-none').textContent = shift.no_result;
   $('yield').textContent = shift.yield_pct === undefined ? '–' : num(shift.yield_pct, 1) + ' %';
 }

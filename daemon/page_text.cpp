@@ -88,6 +88,8 @@ void write_bends(JsonWriter& w, const v1::InspectionReport& report) {
     w.field("springback_deg", b.springback_deg());
     w.field("tolerance_deg", b.angle_tolerance_deg());
     w.field("pass", b.pass());
+    w.field("springback_uncertainty_deg", b.springback_uncertainty_deg());
+    w.field("decision", v1::Conformity_Name(b.decision()));
     w.field("status", b.status());
     w.end_object();
   }
@@ -110,6 +112,7 @@ void write_last(JsonWriter& w, const PageResult& r) {
   w.field("min_mm", d.min());
   w.field("max_mm", d.max());
   w.field("tolerance_mm", d.tolerance_mm());
+  w.field("uncertainty_mm", d.uncertainty_mm());
   w.field("color_scale_mm", d.color_scale_mm());
   w.end_object();
   write_bends(w, r.report);
@@ -147,6 +150,8 @@ void ShiftCounts::count(const v1::InspectionReport& report, int sign) {
     pass += sign;
   } else if (verdict == "FAIL") {
     fail += sign;
+  } else if (verdict == "UNDECIDED") {
+    undecided += sign;
   } else {
     no_result += sign;
   }
@@ -158,13 +163,15 @@ const char* page_verdict(const v1::InspectionReport& report) {
     case regs::ResultCode::kScanFailed:
     case regs::ResultCode::kAnalysisFailed:
       return "NO RESULT";
+    case regs::ResultCode::kUndecided:
+      return "UNDECIDED";
     default:
       // The runner sets RESULT_CODE 0 only with verdict.pass; a report that `springscan analyze`
       // wrote has no RESULT_CODE (0), and then the verdict alone decides.
-      return static_cast<regs::ResultCode>(report.result_code()) == regs::ResultCode::kOk &&
-                     report.verdict().pass()
-                 ? "PASS"
-                 : "FAIL";
+      if (static_cast<regs::ResultCode>(report.result_code()) == regs::ResultCode::kOk &&
+          report.verdict().pass())
+        return "PASS";
+      return report.verdict().decision() == v1::Verdict::UNDECIDED ? "UNDECIDED" : "FAIL";
   }
 }
 
@@ -213,6 +220,8 @@ v1::InspectionReport page_fields(const v1::InspectionReport& full) {
     bend->set_springback_deg(b.springback_deg());
     bend->set_angle_tolerance_deg(b.angle_tolerance_deg());
     bend->set_pass(b.pass());
+    bend->set_decision(b.decision());
+    bend->set_springback_uncertainty_deg(b.springback_uncertainty_deg());
     bend->set_measured(b.measured());
     bend->set_status(b.status());
   }
@@ -288,9 +297,11 @@ std::string page_snapshot_json(const PageView& view) {
   w.field("parts", static_cast<std::int64_t>(view.shift.parts));
   w.field("pass", static_cast<std::int64_t>(view.shift.pass));
   w.field("fail", static_cast<std::int64_t>(view.shift.fail));
+  w.field("undecided", static_cast<std::int64_t>(view.shift.undecided));
   w.field("no_result", static_cast<std::int64_t>(view.shift.no_result));
-  // Yield over the parts that got a verdict: a failed scan says nothing about the part.
-  const int judged = view.shift.pass + view.shift.fail;
+  // Yield over the results that judged the part: a failed scan says nothing about the part; an
+  // undecided one was measured but not proven good.
+  const int judged = view.shift.pass + view.shift.fail + view.shift.undecided;
   if (judged > 0) w.field("yield_pct", 100.0 * view.shift.pass / judged);
   w.end_object();
   w.end_object();

@@ -39,6 +39,7 @@ struct ShiftCounts {
   int parts = 0;      ///< every result
   int pass = 0;       ///< PASS
   int fail = 0;       ///< FAIL
+  int undecided = 0;  ///< UNDECIDED: within U of a limit; re-measured, then checked by hand
   int no_result = 0;  ///< the scan or the analysis failed: no verdict on the part
   /// Adds (sign 1) or removes (-1) a result.
   void count(const v1::InspectionReport& report, int sign);
@@ -53,8 +54,9 @@ struct PageView {
   ShiftCounts shift;
 };
 
-/// The page's word for a result: PASS (RESULT_CODE 0 and verdict.pass), FAIL, or NO RESULT
-/// (RESULT_CODE 2, 3, 4: nothing was measured).
+/// The page's word for a result: PASS (RESULT_CODE 0 and verdict.pass), UNDECIDED (RESULT_CODE
+/// 6, or verdict.decision UNDECIDED), FAIL, or NO RESULT (RESULT_CODE 2, 3, 4: nothing was
+/// measured).
 const char* page_verdict(const v1::InspectionReport& report);
 /// The page's word for a state: starting, idle, scanning, analysing, done or fault.
 const char* page_state(regs::State state);

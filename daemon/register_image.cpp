@@ -47,9 +47,9 @@ void RegisterImage::publish_status(const MachineStatus& s, const LiveValues& liv
   auto* m = mapping_.get();
   const bool heartbeat_bit = ((live.heartbeat / 10) & 1u) != 0;  // toggles every second
   const bool di[regs::kDiCount] = {
-      s.ready,        s.trigger_ack,         s.busy,           s.result_valid, s.part_ok,
-      s.error(),      s.trigger_rejected,    s.scanner_online, heartbeat_bit,  s.plc_comm_lost,
-      s.result_stale, live.calibration_drift};
+      s.ready,        s.trigger_ack,          s.busy,           s.result_valid, s.part_ok,
+      s.error(),      s.trigger_rejected,     s.scanner_online, heartbeat_bit,  s.plc_comm_lost,
+      s.result_stale, live.calibration_drift, s.part_undecided};
   std::uint16_t status_word = 0;
   for (int i = 0; i < regs::kDiCount; ++i) {
     m->tab_input_bits[i] = di[i] ? 1 : 0;
@@ -89,14 +89,14 @@ void RegisterImage::publish_result(const ResultBlock& block) {
   const auto bends = std::min<std::size_t>(block.bends.size(), regs::kMaxBends);
   ir[regs::kIrBendCount] = static_cast<std::uint16_t>(bends);
   ir[regs::kIrBendRecordSize] = regs::kBendRecordSize;
-  std::uint16_t failed = 0;
+  std::uint16_t failed = 0, undecided = 0;
   for (std::size_t j = 0; j < bends; ++j) {
     const BendRow& b = block.bends[j];
     const auto base = static_cast<std::uint16_t>(regs::kIrBendTable + j * regs::kBendRecordSize);
     ir[base + regs::kBendId] = b.id;
     ir[base + regs::kBendFlags] = static_cast<std::uint16_t>(
         (b.measured ? regs::kBendMeasured : 0) | (b.pass ? regs::kBendPass : 0) |
-        (b.measurable ? 0 : regs::kBendNotMeasurable));
+        (b.measurable ? 0 : regs::kBendNotMeasurable) | (b.undecided ? regs::kBendUndecided : 0));
     put_int32(static_cast<std::uint16_t>(base + regs::kBendSpringback),
               regs::deg_to_mdeg(b.springback_deg));
     put_int32(static_cast<std::uint16_t>(base + regs::kBendMeasuredAngle),
@@ -107,9 +107,11 @@ void RegisterImage::publish_result(const ResultBlock& block) {
               regs::deg_to_mdeg(b.angle_spread_deg));
     put_int32(static_cast<std::uint16_t>(shape + regs::kBendMeasuredRadius),
               regs::mm_to_um(b.measured_radius_mm));
-    if (b.measured && !b.pass) ++failed;
+    if (b.measured && !b.pass && !b.undecided) ++failed;
+    if (b.undecided) ++undecided;
   }
   ir[regs::kIrBendsFailed] = failed;
+  ir[regs::kIrBendsUndecided] = undecided;
   const auto vectors = std::min<std::size_t>(block.vectors.size(), regs::kMaxVectors);
   ir[regs::kIrVectorCount] = static_cast<std::uint16_t>(vectors);
   ir[regs::kIrVectorRecordSize] = regs::kVectorRecordSize;

@@ -26,7 +26,10 @@ namespace springscan::daemon::regs {
 // fault), which version 1 reported as 9.
 // 4: CALIBRATION_DRIFT (discrete input 11, status word bit 11), from the check part (issue 42).
 // 5: PART_SERIAL (holding 5-6), the individual part's serial for the gauge studies (issue 42).
-inline constexpr std::uint16_t kMapVersion = 5;
+// 6: the undecided part (issue 41, docs/uncertainty.md): RESULT_CODE 6 UNDECIDED, PART_UNDECIDED
+// (discrete input 12, status word bit 12), bend flag UNDECIDED, BENDS_UNDECIDED at 119 (was
+// reserved, 0). An UNDECIDED part is never PART_OK: a PLC program of version 5 stays safe.
+inline constexpr std::uint16_t kMapVersion = 6;
 
 // ------------------------------------------------------------------------------------------
 // Coils (FC01 read, FC05/FC15 write): PLC -> station.
@@ -52,7 +55,10 @@ inline constexpr std::uint16_t kDiResultStale = 10;  ///< RESULT_VALID unacknowl
 /// The check part was beyond a reference limit (latched until a check part passes; the PLC holds
 /// production until the heads are recalibrated, docs/calibration.md).
 inline constexpr std::uint16_t kDiCalibrationDrift = 11;
-inline constexpr std::uint16_t kDiCount = 12;
+/// The result's part could not be decided (RESULT_CODE 6; valid only with RESULT_VALID, cleared
+/// with it): re-measure once, then route the part to a manual check. PART_OK is 0 then.
+inline constexpr std::uint16_t kDiPartUndecided = 12;
+inline constexpr std::uint16_t kDiCount = 13;
 
 // ------------------------------------------------------------------------------------------
 // Holding registers (FC03 read, FC06/FC16 write). 0..6 are written by the PLC; the mirrors
@@ -101,10 +107,10 @@ inline constexpr std::uint16_t kIrVectorRecordSize = 109;
 inline constexpr std::uint16_t kIrCycleTimeMs = 110;  ///< 110..111 int32 ms, trigger -> result
 inline constexpr std::uint16_t kIrBendCount = 112;    ///< bends in the table (<= 16)
 inline constexpr std::uint16_t kIrBendRecordSize = 113;
-inline constexpr std::uint16_t kIrBendsFailed = 114;     ///< bends out of angle tolerance
+inline constexpr std::uint16_t kIrBendsFailed = 114;     ///< bends out of angle tolerance (by > U)
 inline constexpr std::uint16_t kIrP95Deviation = 115;    ///< 115..116 int32 um, 95th pct |dev|
 inline constexpr std::uint16_t kIrScanPoints = 117;      ///< 117..118 int32 points scanned
-inline constexpr std::uint16_t kIrResultReserved = 119;  ///< reserved, reads 0
+inline constexpr std::uint16_t kIrBendsUndecided = 119;  ///< bends UNDECIDED (within U, unmeasured)
 inline constexpr std::uint16_t kIrBendTable = 120;       ///< kMaxBends records of 6 registers
 inline constexpr std::uint16_t kBendRecordSize = 6;
 inline constexpr std::uint16_t kMaxBends = 16;
@@ -177,6 +183,10 @@ enum class ResultCode : std::uint16_t {
   kScanFailed = 3,      ///< the scan did not complete (unplug, timeout, corrupt data)
   kAnalysisFailed = 4,  ///< the scan could not be analysed (too few points, no fit)
   kAmbiguous = 5,       ///< analysed, but two orientations fit within noise: NOK
+  /// analysed; nothing is out of tolerance by more than its uncertainty, but something lies
+  /// within it of its limit (or a bend was not measured): not OK, re-measure once, then check
+  /// by hand (PART_OK = 0, PART_UNDECIDED = 1)
+  kUndecided = 6,
 };
 
 /// ERROR_CODE register: why ERROR is set. Latched until ERROR_RESET.
@@ -220,9 +230,10 @@ enum class RejectCode : std::uint16_t {
 
 /// Bend record flags.
 enum BendFlag : std::uint16_t {
-  kBendMeasured = 1u << 0,       ///< both flanges had enough points
-  kBendPass = 1u << 1,           ///< |springback| within the angle tolerance
+  kBendMeasured = 1u << 0,  ///< both flanges had enough points
+  kBendPass = 1u << 1,  ///< |springback| within the angle tolerance (by more than U, guard band)
   kBendNotMeasurable = 1u << 2,  ///< a closed hem: listed, not judged (pass is set)
+  kBendUndecided = 1u << 3,      ///< within U of the tolerance, or not measured (map version 6)
 };
 
 /// Vector record flags.

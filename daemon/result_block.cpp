@@ -29,15 +29,15 @@ ResultBlock result_block_from_report(const v1::InspectionReport& report) {
   block.job_id = static_cast<std::uint16_t>(report.job_id());
   block.part_id = part_id_number(report.input().part_id());
   const auto code = report.result_code();
-  block.code = code <= static_cast<std::uint32_t>(regs::ResultCode::kAmbiguous)
+  block.code = code <= static_cast<std::uint32_t>(regs::ResultCode::kUndecided)
                    ? static_cast<regs::ResultCode>(code)
                    : regs::ResultCode::kAnalysisFailed;
   block.cycle_time_ms = static_cast<std::int64_t>(
       std::llround(std::isfinite(report.cycle_time_ms()) ? report.cycle_time_ms() : 0.0));
   block.scan_points = report.input().scan_points();
-  const bool analysed = block.code == regs::ResultCode::kOk ||
-                        block.code == regs::ResultCode::kFormNok ||
-                        block.code == regs::ResultCode::kAmbiguous;
+  const bool analysed =
+      block.code == regs::ResultCode::kOk || block.code == regs::ResultCode::kFormNok ||
+      block.code == regs::ResultCode::kAmbiguous || block.code == regs::ResultCode::kUndecided;
   if (!analysed) {
     // No analysis: the deviation fields say "no value" rather than a plausible zero.
     const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -53,6 +53,7 @@ ResultBlock result_block_from_report(const v1::InspectionReport& report) {
     row.id = static_cast<std::uint16_t>(std::clamp(bend.id(), 0, 65535));
     row.measured = bend.measured();
     row.pass = bend.pass();
+    row.undecided = bend.decision() == v1::UNDECIDED;
     row.springback_deg = finite_or_nan(bend.springback_deg());
     row.measured_angle_deg = finite_or_nan(bend.measured_angle_deg());
     row.measurable = !bend.has_measurable() || bend.measurable();

@@ -23,6 +23,7 @@ struct BendRow {
   double angle_spread_deg = std::numeric_limits<double>::quiet_NaN();
   /// The bend zone's inner radius; NaN (no value) when not fitted.
   double measured_radius_mm = std::numeric_limits<double>::quiet_NaN();
+  bool undecided = false;  ///< decision UNDECIDED: within U of its limit, or not measured
 };
 
 struct VectorRow {

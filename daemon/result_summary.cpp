@@ -4,6 +4,16 @@
 
 namespace springscan::daemon {
 
+namespace {
+
+// A decision by its proto name; absent where nothing was decided (a failed scan, a report from
+// before decisions), so a consumer never reads a default as a verdict.
+void decision_field(JsonWriter& w, const char* name, v1::Conformity c) {
+  if (c != v1::CONFORMITY_UNSPECIFIED) w.field(name, v1::Conformity_Name(c));
+}
+
+}  // namespace
+
 std::string result_summary_json(const v1::InspectionReport& report, const PublishedIds& ids) {
   JsonWriter w;
   w.begin_object();
@@ -17,6 +27,11 @@ std::string result_summary_json(const v1::InspectionReport& report, const Publis
   w.field("part_id", report.input().part_id());
   w.field("result_code", static_cast<std::uint64_t>(report.result_code()));
   w.field("pass", report.verdict().pass());
+  const v1::Verdict& verdict = report.verdict();
+  if (verdict.decision() != v1::Verdict::DECISION_UNSPECIFIED) {
+    w.field("decision", v1::Verdict::Decision_Name(verdict.decision()));
+    w.field("decision_rule", v1::VerdictSettings::DecisionRule_Name(verdict.decision_rule()));
+  }
   w.begin_array("reasons");
   for (const auto& reason : report.verdict().reasons()) w.element(reason);
   w.end_array();
@@ -32,6 +47,8 @@ std::string result_summary_json(const v1::InspectionReport& report, const Publis
     w.field("fraction_out_of_tolerance", d.fraction_out_of_tolerance());
     w.field("tolerance_mm", d.tolerance_mm());
     w.field("points", static_cast<std::int64_t>(d.points()));
+    w.field("uncertainty_mm", d.uncertainty_mm());
+    decision_field(w, "decision", d.decision());
     w.end_object();
   }
   w.begin_array("bends");
@@ -44,6 +61,9 @@ std::string result_summary_json(const v1::InspectionReport& report, const Publis
     w.field("springback_deg", b.springback_deg());
     w.field("angle_tolerance_deg", b.angle_tolerance_deg());
     w.field("pass", b.pass());
+    w.field("springback_uncertainty_deg", b.springback_uncertainty_deg());
+    w.field("angle_uncertainty_deg", b.angle_uncertainty_deg());
+    decision_field(w, "decision", b.decision());
     if (b.angle_along_bend_size() > 0) w.field("angle_spread_deg", b.angle_spread_deg());
     if (b.has_measured_radius_mm()) w.field("measured_radius_mm", b.measured_radius_mm());
     if (!b.status().empty()) w.field("status", b.status());
@@ -58,7 +78,12 @@ std::string result_summary_json(const v1::InspectionReport& report, const Publis
     w.field("id", static_cast<std::int64_t>(seg.id()));
     w.field("flatness_mm", seg.flatness_mm());
     w.field("flatness_rms_mm", seg.flatness_rms_mm());
-    if (seg.has_curl_radius_mm()) w.field("curl_radius_mm", seg.curl_radius_mm());
+    w.field("flatness_uncertainty_mm", seg.flatness_uncertainty_mm());
+    if (seg.has_curl_radius_mm()) {
+      w.field("curl_radius_mm", seg.curl_radius_mm());
+      w.field("curl_radius_uncertainty_mm", seg.curl_radius_uncertainty_mm());
+    }
+    decision_field(w, "shape_decision", seg.shape_decision());
     if (seg.has_twist_deg_per_100mm()) w.field("twist_deg_per_100mm", seg.twist_deg_per_100mm());
     w.end_object();
   }

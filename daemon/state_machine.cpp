@@ -146,6 +146,7 @@ regs::RejectCode InspectionMachine::reject_reason(const PlcControl& plc) const {
 void InspectionMachine::clear_result() {
   status_.result_valid = false;
   status_.part_ok = false;
+  status_.part_undecided = false;
   status_.result_stale = false;
 }
 
@@ -168,6 +169,7 @@ void InspectionMachine::on_job_finished(const JobEnd& end, Clock::time_point now
     // A result that is not on disk is never announced (DESIGN.md "The daemon").
     status_.result_valid = false;
     status_.part_ok = false;
+    status_.part_undecided = false;
     status_.error_code = end.error_code != regs::ErrorCode::kNone
                              ? end.error_code
                              : regs::ErrorCode::kReportWriteFailed;
@@ -179,6 +181,8 @@ void InspectionMachine::on_job_finished(const JobEnd& end, Clock::time_point now
   status_.result_valid = true;
   status_.result_stale = false;
   status_.part_ok = end.part_ok && end.result_code == regs::ResultCode::kOk;
+  // Never together with PART_OK: an UNDECIDED part is not OK (register map version 6).
+  status_.part_undecided = end.result_code == regs::ResultCode::kUndecided;
   result_time_ = now;
   if (end.error_code != regs::ErrorCode::kNone) {
     status_.error_code = end.error_code;

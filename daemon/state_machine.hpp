@@ -44,6 +44,7 @@ struct MachineStatus {
   bool busy = false;
   bool result_valid = false;
   bool part_ok = false;
+  bool part_undecided = false;  ///< the result is RESULT_CODE UNDECIDED (never with part_ok)
   bool trigger_rejected = false;
   bool scanner_online = false;
   bool plc_comm_lost = false;

@@ -210,8 +210,9 @@ void Station::handle_runner_events(Clock::time_point now) {
       last_result_text_ =
           "last result seq " + std::to_string(event.block.seq) + " part " +
           std::to_string(event.block.part_id) + ": " +
-          (event.end.result_code == regs::ResultCode::kOk
-               ? "PASS"
+          (event.end.result_code == regs::ResultCode::kOk ? "PASS"
+           : event.end.result_code == regs::ResultCode::kUndecided
+               ? "UNDECIDED"
                : "FAIL/code " + std::to_string(static_cast<int>(event.end.result_code)));
     }
     machine_.on_job_finished(event.end, now);

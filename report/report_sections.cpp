@@ -29,6 +29,32 @@ std::string status_cell(const char* css, const char* word) {
   return std::string("<td><span class='status ") + css + "'>" + word + "</span></td>";
 }
 
+// A value and its expanded uncertainty U (k = 2): "0.98 &plusmn; 0.05"; the value alone where
+// the report has no U (before the uncertainty stage, or 0).
+std::string with_u(const std::string& value, double u, int decimals) {
+  return u > 0.0 ? value + " &plusmn; " + fixed(u, decimals) : value;
+}
+
+// A characteristic's decision as a result cell; reports from before decisions: pass/fail.
+std::string decision_cell(v1::Conformity decision, bool pass) {
+  switch (decision) {
+    case v1::CONFORMING:
+      return status_cell("ok", "PASS");
+    case v1::NONCONFORMING:
+      return status_cell("ng", "FAIL");
+    case v1::UNDECIDED:
+      return status_cell("ud", "UNDECIDED");
+    default:
+      return pass ? status_cell("ok", "PASS") : status_cell("ng", "FAIL");
+  }
+}
+
+// The part's word and banner class: the decision, or pass/fail for a report without one.
+std::pair<const char*, const char*> verdict_word(const v1::Verdict& verdict) {
+  if (verdict.decision() == v1::Verdict::UNDECIDED) return {"undecided", "UNDECIDED"};
+  return verdict.pass() ? std::make_pair("pass", "PASS") : std::make_pair("fail", "FAIL");
+}
+
 // A small line of the angle along the bend: stations left to right, min to max bottom to top
 // (a flat line when the spread is below 0.01 degrees).
 std::string angle_sparkline(const v1::Bend& bend) {
@@ -66,9 +92,12 @@ std::string along_cell(const v1::Bend& bend) {
 std::string shape_cells(const v1::Segment& segment) {
   if (!segment.shape_measured())
     return "<td class='num'>&mdash;</td><td class='num'>&mdash;</td><td class='num'>&mdash;</td>";
-  return "<td class='num'>" + fixed(segment.flatness_mm(), 3) + " (rms " +
+  return "<td class='num'>" +
+         with_u(fixed(segment.flatness_mm(), 3), segment.flatness_uncertainty_mm(), 3) + " (rms " +
          fixed(segment.flatness_rms_mm(), 3) + ")</td><td class='num'>" +
-         (segment.has_curl_radius_mm() ? signed_fixed(segment.curl_radius_mm(), 0) : "flat") +
+         (segment.has_curl_radius_mm() ? with_u(signed_fixed(segment.curl_radius_mm(), 0),
+                                                segment.curl_radius_uncertainty_mm(), 0)
+                                       : "flat") +
          "</td><td class='num'>" +
          (segment.has_twist_deg_per_100mm() ? signed_fixed(segment.twist_deg_per_100mm(), 3)
                                             : "&mdash;") +
@@ -80,7 +109,8 @@ std::string edge_line(const v1::EdgeDeviation& e) {
   return escape_html(e.kind().empty() ? "free" : e.kind()) + " edge: in-plane " +
          signed_fixed(e.in_plane_mean(), 2) + " (" + signed_fixed(e.in_plane_min(), 2) + " to " +
          signed_fixed(e.in_plane_max(), 2) + "), across " + signed_fixed(e.across_mean(), 2) +
-         " (" + signed_fixed(e.across_min(), 2) + " to " + signed_fixed(e.across_max(), 2) + ")";
+         " (" + signed_fixed(e.across_min(), 2) + " to " + signed_fixed(e.across_max(), 2) + ")" +
+         (e.uncertainty_mm() > 0.0 ? ", U " + fixed(e.uncertainty_mm(), 2) : "");
 }
 
 // The flange's measured trim edges, one line each (a report written before trim_edges: its
@@ -98,6 +128,7 @@ std::string edge_cell(const v1::Segment& segment) {
 
 std::string header_html(const v1::InspectionReport& report) {
   const auto& input = report.input();
+  const auto [css, word] = verdict_word(report.verdict());
   const bool pass = report.verdict().pass();
   std::string html =
       "<header class='top'><div><h1>Springback inspection report</h1><div "
@@ -108,8 +139,8 @@ std::string header_html(const v1::InspectionReport& report) {
           escape_html(report.station().empty() ? "(offline)" : report.station()) + "<br>Job " +
           std::to_string(report.job_id()) + " &middot; result " +
           std::to_string(report.result_seq()) + "</div></header>";
-  html += std::string("<div class='banner ") + (pass ? "pass" : "fail") +
-          "' id='verdict'><div class='word'>" + (pass ? "PASS" : "FAIL") + "</div>";
+  html += std::string("<div class='banner ") + css + "' id='verdict'><div class='word'>" + word +
+          "</div><div>";
   if (report.verdict().reasons_size() == 0) {
     html += std::string("<div class='none'>") +
             (pass ? "All checks within tolerance." : "No reason recorded.") + "</div>";
@@ -119,19 +150,34 @@ std::string header_html(const v1::InspectionReport& report) {
       html += "<li>" + escape_html(reason) + "</li>";
     html += "</ul>";
   }
-  return html + "</div>";
+  // Which rule decided (docs/report-format.md): a reader must know whether U was applied.
+  if (report.verdict().decision() != v1::Verdict::DECISION_UNSPECIFIED) {
+    html += report.verdict().decision_rule() == v1::VerdictSettings::SIMPLE
+                ? "<div class='rule'>Decided by the simple rule: each value alone against its "
+                  "limit, its uncertainty U not applied.</div>"
+                : "<div class='rule'>Decided by the guard band (ISO 14253-1): a value conforms "
+                  "when inside its limit by more than its expanded uncertainty U (k = 2), does "
+                  "not when outside by more than U; in between the station cannot tell "
+                  "(UNDECIDED: re-measure, then check by hand).</div>";
+  }
+  return html + "</div></div>";
 }
 
 std::string deviation_table(const v1::Deviation& d) {
-  return kv_table({{"Minimum (signed)", mm(d.min())},
-                   {"Maximum (signed)", mm(d.max())},
-                   {"Mean (signed)", mm(d.mean())},
-                   {"RMS", mm(d.rms())},
-                   {"95th percentile of |deviation|", mm(d.p95())},
-                   {"Out of tolerance", fixed(100.0 * d.fraction_out_of_tolerance(), 2) + " %"},
-                   {"Tolerance", "\u00b1" + mm(d.tolerance_mm())},
-                   {"Points", count(d.points())},
-                   {"Reference", d.reference().empty() ? "n/a" : d.reference()}});
+  return kv_table(
+      {{"Minimum (signed)", mm(d.min())},
+       {"Maximum (signed)", mm(d.max())},
+       {"Mean (signed)", mm(d.mean())},
+       {"RMS", mm(d.rms())},
+       {"95th percentile of |deviation|", mm(d.p95())},
+       {"Out of tolerance", fixed(100.0 * d.fraction_out_of_tolerance(), 2) + " %"},
+       {"Tolerance", "\u00b1" + mm(d.tolerance_mm())},
+       {"Points", count(d.points())},
+       {"U of the statistic judged (k = 2)",
+        d.uncertainty_mm() > 0.0 ? mm(d.uncertainty_mm()) : "n/a"},
+       {"Surface criterion",
+        d.decision() == v1::CONFORMITY_UNSPECIFIED ? "n/a" : v1::Conformity_Name(d.decision())},
+       {"Reference", d.reference().empty() ? "n/a" : d.reference()}});
 }
 
 std::string bend_table(const v1::InspectionReport& report) {
@@ -143,27 +189,38 @@ std::string bend_table(const v1::InspectionReport& report) {
       "<th class='num'>Flanges</th><th>Result</th></tr>";
   for (const auto& bend : report.bends()) {
     const bool measured = bend.measured();
-    const char* row = !measured ? "bend nm" : bend.pass() ? "bend ok" : "bend ng";
+    const bool undecided = bend.decision() == v1::UNDECIDED;
+    const char* row = !measured     ? "bend nm"
+                      : undecided   ? "bend ud"
+                      : bend.pass() ? "bend ok"
+                                    : "bend ng";
     html += std::string("<tr class='") + row + "' id='bend-" + std::to_string(bend.id()) +
             "'><td><b>B" + std::to_string(bend.id()) + "</b></td><td class='num'>" +
             fixed(bend.nominal_angle_deg(), 2) + "</td><td class='num'>" +
-            (measured ? fixed(bend.measured_angle_deg(), 2) : "&mdash;") +
+            (measured ? with_u(fixed(bend.measured_angle_deg(), 2), bend.angle_uncertainty_deg(), 3)
+                      : "&mdash;") +
             (measured && bend.end_tangents() ? "&dagger;" : "") + "</td><td class='num'>" +
-            (measured ? signed_fixed(bend.springback_deg(), 2) : "&mdash;") +
+            (measured ? with_u(signed_fixed(bend.springback_deg(), 2),
+                               bend.springback_uncertainty_deg(), 3)
+                      : "&mdash;") +
             "</td><td class='num'>" + fixed(bend.angle_tolerance_deg(), 2) + "</td>" +
             along_cell(bend) + "<td class='num'>" + fixed(bend.radius_mm(), 1) +
             "</td><td class='num'>" +
-            (bend.has_measured_radius_mm() ? fixed(bend.measured_radius_mm(), 2) : "&mdash;") +
+            (bend.has_measured_radius_mm()
+                 ? with_u(fixed(bend.measured_radius_mm(), 2), bend.radius_uncertainty_mm(), 2)
+                 : "&mdash;") +
             "</td><td class='num'>" + std::to_string(bend.segment_a()) + " / " +
             std::to_string(bend.segment_b()) + "</td>" +
-            (!measured     ? status_cell("nm", "NOT MEASURED")
-             : bend.pass() ? status_cell("ok", "PASS")
-                           : status_cell("ng", "FAIL")) +
+            (!measured ? status_cell(undecided ? "ud" : "nm",
+                                     undecided ? "NOT MEASURED: UNDECIDED" : "NOT MEASURED")
+                       : decision_cell(bend.decision(), bend.pass())) +
             "</tr>";
   }
   return html +
          "</table><p class='note'>Springback = nominal &minus; measured angle: positive "
-         "when the bend opened up. Along the bend: the angle at stations along the bend line "
+         "when the bend opened up. &plusmn; the expanded uncertainty U (k = 2, about 95 %) of "
+         "that very scan. UNDECIDED: within U of the tolerance, or not measured. Along the bend: "
+         "the angle at stations along the bend line "
          "(least to greatest, their spread). &dagger; Next to a curled flange: the angle "
          "between the tangent planes at the flanges' ends next to the bend (NUMISHEET'93), not "
          "between planes through the whole flanges.</p>";
@@ -175,7 +232,7 @@ std::string segment_table(const v1::InspectionReport& report) {
       "<th class='num'>Points</th><th class='num'>Local fit RMS [mm]</th>"
       "<th class='num'>Iterations</th><th>Converged</th><th class='num'>Flatness [mm]</th>"
       "<th class='num'>Curl radius [mm]</th><th class='num'>Twist [\u00b0/100 mm]</th>"
-      "<th class='num'>Trim edges [mm]</th></tr>";
+      "<th class='num'>Trim edges [mm]</th><th>Shape</th></tr>";
   for (const auto& segment : report.segments()) {
     std::string faces;
     for (int f : segment.cad_faces()) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
@@ -184,7 +241,11 @@ std::string segment_table(const v1::InspectionReport& report) {
             "</td><td class='num'>" + fixed(segment.local_fit().rms(), 3) +
             "</td><td class='num'>" + std::to_string(segment.local_fit().iterations()) +
             "</td><td>" + yes_no(segment.local_fit().converged()) + "</td>" + shape_cells(segment) +
-            edge_cell(segment) + "</tr>";
+            edge_cell(segment) +
+            (segment.shape_decision() == v1::CONFORMITY_UNSPECIFIED
+                 ? std::string("<td>&mdash;</td>")
+                 : decision_cell(segment.shape_decision(), false)) +
+            "</tr>";
   }
   return html + "</table>";
 }

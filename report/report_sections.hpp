@@ -8,9 +8,11 @@
 
 namespace springscan::report {
 
-/// Title, part, time, station, and the PASS/FAIL banner with the verdict's reasons.
+/// Title, part, time, station, and the PASS / FAIL / UNDECIDED banner with the verdict's
+/// reasons and the decision rule that decided.
 std::string header_html(const v1::InspectionReport& report);
-/// min, max, mean, rms, p95, share out of tolerance, tolerance, points.
+/// min, max, mean, rms, p95, share out of tolerance, tolerance, points, the U of the statistic
+/// judged and the surface criterion's decision.
 std::string deviation_table(const v1::Deviation& deviation);
 /// One row per bend (class "bend", id "bend-<id>"): nominal, measured, springback, tolerance,
 /// radius and the result.

@@ -6,7 +6,7 @@ const char* report_css() {
   return R"css(
 @page { size: A4; margin: 12mm 11mm 14mm 11mm; }
 :root { --ink: #1c2330; --muted: #5b6576; --rule: #d5dae2; --pass: #18794e; --fail: #c0262d;
-        --nm: #8a919c; --band: #f3f5f8; }
+        --nm: #8a919c; --ud: #6f42a8; --band: #f3f5f8; }
 * { box-sizing: border-box; }
 html { font-family: "DejaVu Sans", "Liberation Sans", Arial, Helvetica, sans-serif;
        font-size: 13px; color: var(--ink); background: #fff; }
@@ -23,6 +23,8 @@ header.top .meta { text-align: right; color: var(--muted); font-size: 12px; line
           -webkit-print-color-adjust: exact; print-color-adjust: exact; }
 .banner.pass { background: var(--pass); }
 .banner.fail { background: var(--fail); }
+.banner.undecided { background: var(--ud); }
+.banner .rule { font-size: 11.5px; opacity: .9; margin-top: 4px; }
 .banner .word { font-size: 34px; font-weight: 700; letter-spacing: 3px; }
 .banner ul { margin: 0; padding-left: 18px; font-size: 13.5px; line-height: 1.45; }
 .banner .none { font-size: 13.5px; }
@@ -36,7 +38,9 @@ table.kv td:first-child { color: var(--muted); width: 42%; }
 .grid2 { display: grid; grid-template-columns: minmax(0, 1fr) minmax(0, 1fr); gap: 18px; align-items: start; }
 .status { font-weight: 700; font-size: 11.5px; letter-spacing: .5px; }
 .status.ok { color: var(--pass); } .status.ng { color: var(--fail); } .status.nm { color: var(--nm); }
+.status.ud { color: var(--ud); }
 tr.ng td { background: #fdf0f0; -webkit-print-color-adjust: exact; print-color-adjust: exact; }
+tr.ud td { background: #f4eefb; -webkit-print-color-adjust: exact; print-color-adjust: exact; }
 .views { display: grid; grid-template-columns: minmax(0, 1fr) minmax(0, 1fr); gap: 10px 14px; }
 figure { margin: 0; break-inside: avoid; page-break-inside: avoid; }
 figure svg.view { width: 100%; height: auto; border: 1px solid var(--rule); background: #fff; }

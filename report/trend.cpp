@@ -92,7 +92,8 @@ ControlChart control_chart(const std::vector<double>& values, std::optional<doub
 namespace {
 
 // Beyond rigid flanges: each bend's angle spread along the bend, each flange's flatness, curl
-// radius and twist where the report measured them, with the verdict's limits in force.
+// radius and twist where the report measured them, with the verdict's limits in force, and the
+// U of flatness and curl radius and the flange's shape decision.
 template <typename Add>
 void add_shape_characteristics(const v1::InspectionReport& r, const Add& add) {
   const v1::VerdictSettings& limits = r.settings().verdict();
@@ -107,9 +108,11 @@ void add_shape_characteristics(const v1::InspectionReport& r, const Add& add) {
     const std::string name = "flange " + std::to_string(seg.id());
     if (seg.points() > 0)
       add(r, name + " flatness", "mm", seg.flatness_mm(), std::nullopt,
-          upper(limits.has_max_flatness_mm(), limits.max_flatness_mm()));
+          upper(limits.has_max_flatness_mm(), limits.max_flatness_mm()),
+          seg.flatness_uncertainty_mm(), seg.shape_decision());
     if (seg.has_curl_radius_mm())
-      add(r, name + " curl radius", "mm", seg.curl_radius_mm(), std::nullopt, std::nullopt);
+      add(r, name + " curl radius", "mm", seg.curl_radius_mm(), std::nullopt, std::nullopt,
+          seg.curl_radius_uncertainty_mm(), v1::CONFORMITY_UNSPECIFIED);
     if (seg.has_twist_deg_per_100mm())
       add(r, name + " twist", "deg/100 mm", seg.twist_deg_per_100mm(), std::nullopt, std::nullopt);
   }
@@ -122,7 +125,8 @@ std::vector<Characteristic> collect_characteristics(
   std::vector<Characteristic> out;
   std::map<std::pair<std::string, std::string>, std::size_t> index;
   const auto add = [&](const v1::InspectionReport& r, const std::string& name, const char* unit,
-                       double value, std::optional<double> lsl, std::optional<double> usl) {
+                       double value, std::optional<double> lsl, std::optional<double> usl,
+                       double u = 0.0, v1::Conformity decision = v1::CONFORMITY_UNSPECIFIED) {
     if (!std::isfinite(value)) return;
     const auto key = std::make_pair(r.input().part_id(), name);
     auto found = index.find(key);
@@ -133,6 +137,9 @@ std::vector<Characteristic> collect_characteristics(
     Characteristic& c = out[found->second];
     c.values.push_back(value);
     c.labels.push_back(label(r));
+    c.uncertainties.push_back(std::isfinite(u) ? u : 0.0);
+    c.undecided += decision == v1::UNDECIDED ? 1 : 0;
+    c.nonconforming += decision == v1::NONCONFORMING ? 1 : 0;
     // The limits in force in the newest report.
     c.lsl = lsl;
     c.usl = usl;
@@ -143,15 +150,24 @@ std::vector<Characteristic> collect_characteristics(
       const double tol = b.angle_tolerance_deg();
       add(r, "bend " + std::to_string(b.id()) + " springback", "deg", b.springback_deg(),
           tol > 0 ? std::optional<double>(-tol) : std::nullopt,
-          tol > 0 ? std::optional<double>(tol) : std::nullopt);
+          tol > 0 ? std::optional<double>(tol) : std::nullopt, b.springback_uncertainty_deg(),
+          b.decision());
     }
     add_shape_characteristics(r, add);
     if (r.has_deviation() && r.deviation().points() > 0) {
       const v1::Deviation& d = r.deviation();
       const std::optional<double> usl =
           d.tolerance_mm() > 0 ? std::optional<double>(d.tolerance_mm()) : std::nullopt;
-      add(r, "deviation max |d|", "mm", std::max(-d.min(), d.max()), std::nullopt, usl);
-      add(r, "deviation p95", "mm", d.p95(), std::nullopt, usl);
+      // deviation.uncertainty_mm and decision belong to the statistic the verdict compared.
+      const bool by_max = r.settings().verdict().deviation_statistic() == v1::VerdictSettings::MAX;
+      const auto judged = [&](bool is_max) {
+        return is_max == by_max ? std::make_pair(d.uncertainty_mm(), d.decision())
+                                : std::make_pair(0.0, v1::CONFORMITY_UNSPECIFIED);
+      };
+      add(r, "deviation max |d|", "mm", std::max(-d.min(), d.max()), std::nullopt, usl,
+          judged(true).first, judged(true).second);
+      add(r, "deviation p95", "mm", d.p95(), std::nullopt, usl, judged(false).first,
+          judged(false).second);
     }
   }
   for (Characteristic& c : out) c.chart = control_chart(c.values, c.lsl, c.usl);
@@ -161,6 +177,26 @@ std::vector<Characteristic> collect_characteristics(
     return std::tie(a.part_id, a.name) < std::tie(b.part_id, b.name);
   });
   return out;
+}
+
+DecisionCounts decision_counts(const std::vector<v1::InspectionReport>& reports) {
+  DecisionCounts counts;
+  for (const v1::InspectionReport& r : reports) {
+    switch (r.verdict().decision()) {
+      case v1::Verdict::PASS:
+        ++counts.pass;
+        break;
+      case v1::Verdict::FAIL:
+        ++counts.fail;
+        break;
+      case v1::Verdict::UNDECIDED:
+        ++counts.undecided;
+        break;
+      default:
+        ++counts.none;
+    }
+  }
+  return counts;
 }
 
 analysis::Expected<TrendInput> read_reports(const std::vector<std::string>& paths,
@@ -222,6 +258,8 @@ analysis::Expected<TrendInput> read_reports(const std::vector<std::string>& path
         kept.mutable_input()->set_part_id(full->input().part_id());
         kept.mutable_input()->set_part_serial(full->input().part_serial());  // msa type 3
         *kept.mutable_bends() = full->bends();
+        *kept.mutable_segments() = full->segments();  // the shape characteristics
+        *kept.mutable_settings()->mutable_verdict() = full->settings().verdict();  // limits
         if (full->has_deviation()) *kept.mutable_deviation() = full->deviation();
         if (full->has_verdict()) *kept.mutable_verdict() = full->verdict();
       }

@@ -9,6 +9,8 @@
 //   centre X-bar, limits X-bar +- 2.66 MR-bar (= 3 sigma); MR chart limit D4 MR-bar = 3.267 MR-bar.
 //   Cp = (USL - LSL) / (6 sigma), Cpk = min(USL - X-bar, X-bar - LSL) / (3 sigma), with the
 //   short-term sigma; with one limit only Cp is undefined and Cpk uses that side.
+// Each value keeps its expanded uncertainty U (k = 2) and its decision (issue 41) where the
+// report has them; the page shows value +- U and counts the UNDECIDED values and parts.
 // Western Electric rules (Western Electric Statistical Quality Control Handbook, 1956), flagged
 // on every point that takes part in the breach:
 //   1: a point beyond 3 sigma;  2: 2 of 3 consecutive points beyond 2 sigma on the same side;
@@ -59,9 +61,19 @@ struct Characteristic {
   std::string unit;  ///< "deg", "mm" or "deg/100 mm"
   std::optional<double> lsl, usl;
   std::vector<double> values;
-  std::vector<std::string> labels;  ///< per value: which report ("seq 12, job 5, 2026-...")
-  ControlChart chart;               ///< filled by collect_characteristics
+  std::vector<std::string> labels;      ///< per value: which report ("seq 12, job 5, 2026-...")
+  ControlChart chart;                   ///< filled by collect_characteristics
+  std::vector<double> uncertainties{};  ///< per value: its U (k = 2); 0 where the report has none
+  std::size_t undecided = 0;            ///< values the report's decision rule left UNDECIDED
+  std::size_t nonconforming = 0;        ///< values it found NONCONFORMING
 };
+
+/// The part decisions of many reports (verdict.decision): PASS, FAIL, UNDECIDED, and the
+/// results without one (a failed scan, a report from before decisions).
+struct DecisionCounts {
+  std::size_t pass = 0, fail = 0, undecided = 0, none = 0;
+};
+DecisionCounts decision_counts(const std::vector<v1::InspectionReport>& reports);
 
 /// The characteristics of `reports` (given in time order), per part id; a bend counts only
 /// where it was measured. Tolerance limits: +-angle_tolerance_deg for springback (nominal 0),
@@ -72,8 +84,8 @@ std::vector<Characteristic> collect_characteristics(
 
 struct TrendInput {
   /// Ordered by created_utc, then path. Only what the trend uses is kept: schema, created_utc,
-  /// station, job_id, result_seq, result_code, input.part_id and part_serial, bends, deviation,
-  /// verdict.
+  /// station, job_id, result_seq, result_code, input.part_id and part_serial, bends, segments,
+  /// deviation, verdict, settings.verdict (the shape limits).
   std::vector<v1::InspectionReport> reports;
   std::vector<std::string> skipped;  ///< "path: reason" for files that were not reports
 };

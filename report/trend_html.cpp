@@ -53,6 +53,16 @@ std::string rules_text(std::uint8_t bits) {
   return text;
 }
 
+// The median U of a characteristic's values (those that have one); nothing when none has.
+std::string median_u_text(const Characteristic& c) {
+  std::vector<double> u;
+  for (const double x : c.uncertainties)
+    if (x > 0.0) u.push_back(x);
+  if (u.empty()) return "&ndash;";
+  std::nth_element(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(u.size() / 2), u.end());
+  return value_text(u[u.size() / 2]);
+}
+
 std::string anchor(std::size_t index) {
   // Built by append: `"c" + std::to_string(...)` trips a g++ 12 -Wrestrict false positive.
   std::string id(1, 'c');
@@ -151,8 +161,12 @@ std::string individuals_svg(const Characteristic& c, std::size_t max_markers) {
     svg += "<circle cx=\"" + num(s.x(i)) + "\" cy=\"" + num(s.y(c.values[i])) + "\" r=\"" +
            (flagged ? "3.6" : "2.4") + "\" fill=\"" + (flagged ? "#d62d20" : "#2b3a4a") + "\"" +
            (flagged ? " class=\"flagged\"" : "") + "><title>" + escape_html(c.labels[i]) + ": " +
-           value_text(c.values[i]) + " " + escape_html(c.unit) +
-           (flagged ? " (" + rules_text(ch.rules[i]) + ")" : "") + "</title></circle>";
+           value_text(c.values[i]) +
+           (i < c.uncertainties.size() && c.uncertainties[i] > 0.0
+                ? " &plusmn; " + value_text(c.uncertainties[i])
+                : "") +
+           " " + escape_html(c.unit) + (flagged ? " (" + rules_text(ch.rules[i]) + ")" : "") +
+           "</title></circle>";
   }
   return svg + "</svg>";
 }
@@ -200,12 +214,17 @@ std::string render_trend_html(const std::vector<Characteristic>& characteristics
   html +=
       "<br>Individuals charts: control limits X&#772; &plusmn; 2.66 MR&#772; (3&sigma;, "
       "&sigma; = MR&#772;/1.128); Cp and Cpk from that short-term &sigma;; points breaking a "
-      "Western Electric rule in red.</div>\n";
+      "Western Electric rule in red.<br>Part decisions (ISO 14253-1 guard band unless the "
+      "reports say SIMPLE): " +
+      std::to_string(info.decisions.pass) + " PASS, " + std::to_string(info.decisions.fail) +
+      " FAIL, " + std::to_string(info.decisions.undecided) + " UNDECIDED, " +
+      std::to_string(info.decisions.none) + " without a decision.</div>\n";
 
   html +=
       "<h2>Characteristics by Cpk</h2>\n<table id=\"characteristics\"><thead><tr><th>part</th>"
       "<th>characteristic</th><th>n</th><th>X&#772;</th><th>&sigma;</th><th>LCL</th><th>UCL</th>"
-      "<th>LSL</th><th>USL</th><th>Cp</th><th>Cpk</th><th>flagged</th></tr></thead><tbody>\n";
+      "<th>LSL</th><th>USL</th><th>Cp</th><th>Cpk</th><th>flagged</th><th>median U</th>"
+      "<th>undecided</th><th>nonconforming</th></tr></thead><tbody>\n";
   for (std::size_t i = 0; i < characteristics.size(); ++i) {
     const Characteristic& c = characteristics[i];
     const ControlChart& ch = c.chart;
@@ -216,7 +235,9 @@ std::string render_trend_html(const std::vector<Characteristic>& characteristics
             value_text(ch.ucl) + "</td><td>" + optional_text(c.lsl) + "</td><td>" +
             optional_text(c.usl) + "</td><td>" + optional_text(ch.cp, 2) + "</td><td" +
             cpk_class(ch.cpk) + ">" + optional_text(ch.cpk, 2) + "</td><td>" +
-            std::to_string(ch.points_flagged) + "</td></tr>\n";
+            std::to_string(ch.points_flagged) + "</td><td>" + median_u_text(c) + "</td><td>" +
+            std::to_string(c.undecided) + "</td><td>" + std::to_string(c.nonconforming) +
+            "</td></tr>\n";
   }
   html += "</tbody></table>\n";
 

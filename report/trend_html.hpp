@@ -18,6 +18,7 @@ struct TrendPageInfo {
   std::size_t reports = 0;
   std::size_t skipped = 0;  ///< files that were not readable reports
   std::string first_utc, last_utc;
+  DecisionCounts decisions{};  ///< the part decisions of the reports read (decision_counts)
 };
 
 /// The page. Points are drawn as markers up to `max_markers` per chart (the line always);

@@ -1,6 +1,7 @@
 #include "simulators/plc_client.hpp"
 
 #include <cerrno>
+#include <optional>
 
 namespace springscan::simulators {
 
@@ -171,6 +172,7 @@ Expected<CycleResult> PlcClient::wait_result(CycleResult cycle, Clock::time_poin
   if (!valid) return fail(valid.message());
   cycle.trigger_to_valid_ms = ms_since(triggered);
   cycle.part_ok = valid->bit(regs::kDiPartOk);
+  cycle.part_undecided = valid->bit(regs::kDiPartUndecided);
   cycle.error_code = valid->live[regs::kIrErrorCode];
   // Step 5: RESULT_SEQ before and after the multi-read must agree.
   for (int attempt = 0; attempt < 3; ++attempt) {
@@ -197,6 +199,58 @@ Expected<CycleResult> PlcClient::run_cycle(std::uint16_t job_id, std::uint16_t p
   auto acked = acknowledge();
   if (!acked) return fail(acked.message());
   return done;
+}
+
+const char* to_string(PartRoute route) {
+  switch (route) {
+    case PartRoute::kGood:
+      return "good";
+    case PartRoute::kReject:
+      return "reject";
+    case PartRoute::kManualCheck:
+      return "manual check";
+    case PartRoute::kNoResult:
+      break;
+  }
+  return "no result";
+}
+
+namespace {
+
+// The route of one result; nullopt: the part is not decided yet (UNDECIDED).
+std::optional<PartRoute> route_of(const CycleResult& cycle) {
+  switch (cycle.result.code) {
+    case regs::ResultCode::kOk:
+      return cycle.part_ok ? PartRoute::kGood : PartRoute::kNoResult;
+    case regs::ResultCode::kFormNok:
+    case regs::ResultCode::kAmbiguous:
+      return PartRoute::kReject;
+    case regs::ResultCode::kUndecided:
+      return std::nullopt;
+    default:
+      return PartRoute::kNoResult;
+  }
+}
+
+}  // namespace
+
+Expected<PartInspection> PlcClient::inspect_part(std::uint16_t job_id, std::uint16_t part_id) {
+  PartInspection part;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    auto cycle = run_cycle(job_id, part_id);
+    if (!cycle) return fail(cycle.message());
+    part.cycles.push_back(*cycle);
+    if (!cycle->accepted) return part;  // kNoResult: the trigger was refused
+    const std::optional<PartRoute> route = route_of(*cycle);
+    if (route) {
+      // No result on the re-measure: the first said the station cannot tell; a person decides.
+      part.route =
+          attempt == 1 && *route == PartRoute::kNoResult ? PartRoute::kManualCheck : *route;
+      return part;
+    }
+  }
+  part.route = PartRoute::kManualCheck;  // UNDECIDED twice
+  return part;
 }
 
 Expected<bool> PlcClient::acknowledge() {

@@ -57,10 +57,27 @@ struct CycleResult {
   bool accepted = false;  ///< TRIG_ACK came (else TRIGGER_REJECTED)
   regs::RejectCode reject_code = regs::RejectCode::kNone;
   bool part_ok = false;
+  bool part_undecided = false;   ///< PART_UNDECIDED (register map version 6)
   std::uint16_t error_code = 0;  ///< ERROR_CODE when RESULT_VALID rose
   ResultRead result;
   double trigger_to_ack_ms = 0.0;
   double trigger_to_valid_ms = 0.0;  ///< trigger write -> RESULT_VALID seen
+};
+
+/// Where a PLC program sends a part (docs/modbus-register-map.md "An undecided part").
+enum class PartRoute {
+  kGood,         ///< RESULT_CODE 0 (PART_OK)
+  kReject,       ///< RESULT_CODE 1 or 5: out of tolerance, or the analysis cannot be trusted
+  kManualCheck,  ///< UNDECIDED twice, or no result on the re-measure: a person decides
+  kNoResult,     ///< the first scan or analysis failed (RESULT_CODE 2, 3, 4): the station's fault
+};
+
+const char* to_string(PartRoute route);  ///< "good", "reject", "manual check", "no result"
+
+/// One part through the station: its cycles (two when the first was UNDECIDED) and its route.
+struct PartInspection {
+  std::vector<CycleResult> cycles;
+  PartRoute route = PartRoute::kNoResult;
 };
 
 class PlcClient {
@@ -74,6 +91,10 @@ class PlcClient {
   /// drop TRIGGER, wait RESULT_VALID, read the result consistently, RESULT_ACK (if `ack`).
   analysis::Expected<CycleResult> run_cycle(std::uint16_t job_id, std::uint16_t part_id,
                                             bool ack = true);
+  /// A part as a PLC program of map version 6 runs it: one cycle; on RESULT_CODE 6 UNDECIDED
+  /// one re-measure (same JOB_ID and PART_ID), whose PASS or FAIL decides; UNDECIDED again, or
+  /// no result, routes the part to a manual check. A refused trigger ends it (route kNoResult).
+  analysis::Expected<PartInspection> inspect_part(std::uint16_t job_id, std::uint16_t part_id);
   /// Only the first half: trigger and wait for TRIG_ACK or TRIGGER_REJECTED; drops TRIGGER.
   analysis::Expected<CycleResult> trigger(std::uint16_t job_id, std::uint16_t part_id);
   /// PART_SERIAL written before each later trigger (0: none), as a PLC tracking parts does.

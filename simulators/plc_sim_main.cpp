@@ -1,5 +1,7 @@
-// springscan-plc-sim: a simulated PLC running the handshake N times against springscand and
-// printing each verdict and the trigger -> RESULT_VALID latency.
+// springscan-plc-sim: a simulated PLC running the handshake for N parts against springscand and
+// printing each verdict and the trigger -> RESULT_VALID latency. Like a PLC program of register
+// map version 6 it re-measures an UNDECIDED part once, then routes it: good, reject or manual
+// check (one "part ... route" line per part).
 //   springscan-plc-sim --port 1502 --cycles 5 --parts 3,4 [--host H] [--unit N]
 //                      [--word-order abcd|cdab] [--job-start J] [--serial S] [--no-heartbeat]
 //                      [--timeout S]
@@ -39,6 +41,10 @@ const char* verdict_text(const CycleResult& c) {
       return "PASS";
     case regs::ResultCode::kFormNok:
       return "FAIL (form)";
+    case regs::ResultCode::kAmbiguous:
+      return "FAIL (ambiguous orientation)";
+    case regs::ResultCode::kUndecided:
+      return "UNDECIDED";
     case regs::ResultCode::kScanFailed:
       return "NO RESULT (scan failed)";
     case regs::ResultCode::kAnalysisFailed:
@@ -121,24 +127,29 @@ int main(int argc, char** argv) {
   for (long k = 0; k < cycles; ++k) {
     const auto job = static_cast<std::uint16_t>((job_start + k) & 0xFFFF);
     const std::uint16_t part = parts[static_cast<std::size_t>(k) % parts.size()];
-    auto cycle = (*plc)->run_cycle(job, part);
-    if (!cycle) {
+    auto inspected = (*plc)->inspect_part(job, part);
+    if (!inspected) {
       std::printf("cycle %ld: job %u part %u: ERROR %s\n", k + 1, job, part,
-                  cycle.message().c_str());
+                  inspected.message().c_str());
       return 1;
     }
-    if (!cycle->accepted) {
-      std::printf("cycle %ld: job %u part %u: trigger REFUSED, REJECT_CODE %u\n", k + 1, job, part,
-                  static_cast<unsigned>(cycle->reject_code));
-      ++failures;
-      continue;
+    for (const CycleResult& cycle : inspected->cycles) {
+      if (!cycle.accepted) {
+        std::printf("cycle %ld: job %u part %u: trigger REFUSED, REJECT_CODE %u\n", k + 1, job,
+                    part, static_cast<unsigned>(cycle.reject_code));
+        ++failures;
+        continue;
+      }
+      print_cycle(static_cast<int>(k + 1), job, part, cycle);
+      if (cycle.error_code != 0) {
+        std::printf("  station ERROR_CODE %u: sending ERROR_RESET\n", cycle.error_code);
+        auto reset = (*plc)->reset_errors();
+        if (!reset) return usage(reset.message());
+      }
     }
-    print_cycle(static_cast<int>(k + 1), job, part, *cycle);
-    if (cycle->error_code != 0) {
-      std::printf("  station ERROR_CODE %u: sending ERROR_RESET\n", cycle->error_code);
-      auto reset = (*plc)->reset_errors();
-      if (!reset) return usage(reset.message());
-    }
+    std::printf("part %ld: job %u part %u: %zu measurement(s), route %s\n", k + 1, job, part,
+                inspected->cycles.size(), to_string(inspected->route));
+    std::fflush(stdout);
   }
   return failures == 0 ? 0 : 1;
 }

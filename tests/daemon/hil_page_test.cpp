@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <mutex>
 #include <sstream>
@@ -224,13 +225,16 @@ TEST_F(HilPageTest, BrowserShowsEveryVerdictWithin1sAndCrowdsDoNotSlowTheCycle) 
   for (int j = 0; j < last.bends_size(); ++j) {
     const auto cells = split(bends[static_cast<std::size_t>(j)], '|');
     const v1::Bend& b = last.bends(j);
-    ASSERT_EQ(cells.size(), 6u);
+    ASSERT_EQ(cells.size(), 7u);
     EXPECT_EQ(cells[0], "B" + std::to_string(b.id()));
     EXPECT_EQ(cells[1], fixed2(b.nominal_angle_deg()));
     EXPECT_EQ(cells[2], fixed2(b.measured_angle_deg()));
     EXPECT_EQ(cells[3], fixed2(b.springback_deg()));
-    EXPECT_EQ(cells[4], fixed2(b.angle_tolerance_deg()));
-    EXPECT_EQ(cells[5], b.pass() ? "OK" : "OUT");
+    char u[32];
+    std::snprintf(u, sizeof u, "%.3f", b.springback_uncertainty_deg());
+    EXPECT_EQ(cells[4], u);
+    EXPECT_EQ(cells[5], fixed2(b.angle_tolerance_deg()));
+    EXPECT_EQ(cells[6], b.decision() == v1::UNDECIDED ? "UNDECIDED" : b.pass() ? "OK" : "OUT");
   }
   EXPECT_EQ(browser.evaluate("document.getElementById('verdict').textContent"), "FAIL");
   EXPECT_EQ(browser.evaluate("String(document.getElementById('map').naturalWidth > 0)"), "true");

@@ -25,7 +25,7 @@ class RunnerTest : public ::testing::Test {
                 -> analysis::Expected<analysis::InspectionOutcome> {
               last_part_ = part;
               if (fail_analysis_) return *fail_analysis_;
-              return testing::plane_analysis(scan, 0.1);
+              return testing::plane_analysis(scan, 0.1, uncertainty_mm_);
             },
             store_, log_, RunnerSettings{"test-station", 0.05, {}}) {}
 
@@ -51,6 +51,7 @@ class RunnerTest : public ::testing::Test {
   std::uint16_t last_part_ = 0;
   std::optional<analysis::Error> fail_analysis_;  // set before run_job
   bool acquired_ = false;
+  double uncertainty_mm_ = 0.0;  // the fake analysis's U of max |d|
   JobRunner runner_;
 };
 
@@ -88,6 +89,26 @@ TEST_F(RunnerTest, PartOutOfToleranceFailsWithReasons) {
   ASSERT_EQ((*latest)->verdict().reasons_size(), 1);
   EXPECT_NE((*latest)->verdict().reasons(0).find("exceeds tolerance"), std::string::npos);
   EXPECT_EQ(regs::mm_to_um(e.block.max_deviation_mm), 250);
+}
+
+// Within U of the tolerance: RESULT_CODE 6 UNDECIDED, not PART_OK, not a station fault; the
+// report keeps its decision.
+TEST_F(RunnerTest, PartWithinUOfItsToleranceIsUndecided) {
+  scanner_.offset_mm = 0.12;
+  uncertainty_mm_ = 0.05;
+  const RunnerEvent e = run_job(1, 3);
+  EXPECT_TRUE(e.end.persisted);
+  EXPECT_EQ(e.end.result_code, regs::ResultCode::kUndecided);
+  EXPECT_FALSE(e.end.part_ok);
+  EXPECT_EQ(e.end.error_code, regs::ErrorCode::kNone);
+  EXPECT_EQ(e.block.code, regs::ResultCode::kUndecided);
+  auto latest = store_.load_latest();
+  EXPECT_EQ((*latest)->result_code(), 6u);
+  EXPECT_FALSE((*latest)->verdict().pass());
+  EXPECT_EQ((*latest)->verdict().decision(), v1::Verdict::UNDECIDED);
+  // Beyond by more than U: FAIL as before.
+  scanner_.offset_mm = 0.2;
+  EXPECT_EQ(run_job(2, 3).end.result_code, regs::ResultCode::kFormNok);
 }
 
 TEST_F(RunnerTest, UnplugDuringScanIsAFaultWithAStoredReasonThenNextJobPasses) {

@@ -37,6 +37,11 @@ TEST(PageText, VerdictAndStateWords) {
   EXPECT_STREQ(page_verdict(offline), "FAIL");
   offline.mutable_verdict()->set_pass(true);
   EXPECT_STREQ(page_verdict(offline), "PASS");
+  // UNDECIDED: RESULT_CODE 6, or an offline report whose decision says so; never PASS.
+  EXPECT_STREQ(page_verdict(report(1, regs::ResultCode::kUndecided)), "UNDECIDED");
+  offline.mutable_verdict()->set_pass(false);
+  offline.mutable_verdict()->set_decision(v1::Verdict::UNDECIDED);
+  EXPECT_STREQ(page_verdict(offline), "UNDECIDED");
   EXPECT_STREQ(page_state(regs::State::kIdle), "idle");
   EXPECT_STREQ(page_state(regs::State::kAcquiring), "scanning");
   EXPECT_STREQ(page_state(regs::State::kAnalyzing), "analysing");
@@ -82,10 +87,38 @@ TEST(PageText, SnapshotCarriesStateLastResultRecentAndShift) {
   EXPECT_EQ(json.find("\"picture\""), std::string::npos);  // a failed scan has no map
   EXPECT_NE(json.find("\"recent\":[{\"record\":7"), std::string::npos);
   EXPECT_NE(json.find("{\"record\":6,\"seq\":6"), std::string::npos);
-  EXPECT_NE(json.find("\"parts\":2,\"pass\":1,\"fail\":0,\"no_result\":1,\"yield_pct\":100"),
+  EXPECT_NE(json.find("\"parts\":2,\"pass\":1,\"fail\":0,\"undecided\":0,\"no_result\":1,"
+                      "\"yield_pct\":100"),
             std::string::npos)
       << json;
   EXPECT_NE(json.find("\"report\":\"reports/r000000000006/report.html\""), std::string::npos);
+}
+
+// An undecided part is counted apart and lowers the yield (measured, not proven good); its bend
+// rows carry the decision and U.
+TEST(PageText, UndecidedIsCountedAndItsBendsCarryDecisionAndU) {
+  std::deque<PageResult> recent;
+  PageResult undecided{9, report(9, regs::ResultCode::kUndecided), 0};
+  v1::Bend* bend = undecided.report.add_bends();
+  bend->set_springback_uncertainty_deg(0.125);
+  bend->set_decision(v1::UNDECIDED);
+  recent.push_back(undecided);
+  recent.push_back({8, report(8, regs::ResultCode::kOk), 0});
+  PageView view;
+  view.recent = &recent;
+  for (const auto& r : recent) view.shift.count(r.report, 1);
+  EXPECT_EQ(view.shift.undecided, 1);
+  const std::string json = page_snapshot_json(view);
+  EXPECT_NE(json.find("\"verdict\":\"UNDECIDED\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"springback_uncertainty_deg\":0.125,\"decision\":\"UNDECIDED\""),
+            std::string::npos)
+      << json;
+  EXPECT_NE(json.find("\"undecided\":1,\"no_result\":0,\"yield_pct\":50"), std::string::npos)
+      << json;
+  const v1::InspectionReport copy = page_fields(undecided.report);
+  EXPECT_EQ(copy.bends(0).decision(), v1::UNDECIDED);
+  EXPECT_EQ(copy.bends(0).springback_uncertainty_deg(), 0.125);
+  EXPECT_EQ(copy.verdict().decision(), v1::Verdict::DECISION_UNSPECIFIED);  // as stored
 }
 
 TEST(PageText, DeviationPictureIsTheIsometricViewOfReportHtml) {

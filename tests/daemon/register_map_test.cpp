@@ -103,7 +103,7 @@ TEST_P(RegisterImageTest, ResultBlockEncodesEveryField) {
   EXPECT_EQ(ir(regs::kIrVectorRecordSize), 8);
   EXPECT_EQ(ir(regs::kIrBendCount), 3);
   EXPECT_EQ(ir(regs::kIrBendsFailed), 1);
-  EXPECT_EQ(ir(regs::kIrResultReserved), 0);  // register 119: reserved, always 0
+  EXPECT_EQ(ir(regs::kIrBendsUndecided), 0);  // register 119 (reserved before map version 6)
   const std::uint16_t bend2 = regs::kIrBendTable + regs::kBendRecordSize;
   EXPECT_EQ(ir(bend2 + regs::kBendId), 2);
   EXPECT_EQ(ir(bend2 + regs::kBendFlags), regs::kBendMeasured);
@@ -223,6 +223,60 @@ TEST_P(RegisterImageTest, StaleResultIsDiscreteInputTenAndStatusWordBitTen) {
   EXPECT_TRUE(image.discrete_input(regs::kDiResultStale));
   EXPECT_TRUE(image.discrete_input(regs::kDiResultValid));
   EXPECT_EQ(image.input_register(regs::kIrStatusWord), (1u << 10) | (1u << 3));
+}
+
+// Map version 6: an UNDECIDED result is RESULT_CODE 6, PART_UNDECIDED (discrete input 12,
+// status word bit 12) and never PART_OK; its bends carry the UNDECIDED flag and are counted at
+// 119, apart from the failed ones at 114.
+TEST_P(RegisterImageTest, AnUndecidedResultIsNeverPartOk) {
+  EXPECT_EQ(regs::kMapVersion, 6);
+  EXPECT_EQ(static_cast<int>(regs::ResultCode::kUndecided), 6);
+  EXPECT_EQ(regs::kDiPartUndecided, 12);
+  EXPECT_EQ(regs::kIrBendsUndecided, 119);
+  RegisterImage image(GetParam());
+  ResultBlock block = example_block();
+  block.code = regs::ResultCode::kUndecided;
+  block.bends[0].pass = false;  // within U of its tolerance
+  block.bends[0].undecided = true;
+  BendRow unseen{5, false, false, 0.0, 0.0};  // not measured: undecided too
+  unseen.undecided = true;
+  block.bends.push_back(unseen);
+  image.publish_result(block);
+  const auto ir = [&](std::uint16_t a) { return image.input_register(a); };
+  EXPECT_EQ(ir(regs::kIrResultCode), 6);
+  EXPECT_EQ(ir(regs::kIrBendsFailed), 1);  // bend 2 only
+  EXPECT_EQ(ir(regs::kIrBendsUndecided), 2);
+  EXPECT_EQ(ir(regs::kIrBendTable + regs::kBendFlags), regs::kBendMeasured | regs::kBendUndecided);
+  EXPECT_EQ(ir(regs::kIrBendTable + 3 * regs::kBendRecordSize + regs::kBendFlags),
+            regs::kBendUndecided);
+  MachineStatus s;
+  s.result_valid = true;
+  s.part_undecided = true;
+  image.publish_status(s, LiveValues{});
+  EXPECT_TRUE(image.discrete_input(regs::kDiPartUndecided));
+  EXPECT_FALSE(image.discrete_input(regs::kDiPartOk));
+  EXPECT_EQ(image.input_register(regs::kIrStatusWord), (1u << 12) | (1u << 3));
+  EXPECT_EQ(image.holding_register(regs::kHrLiveMirror + regs::kIrStatusWord),
+            (1u << 12) | (1u << 3));
+}
+
+// The report's decisions reach the block: RESULT_CODE 6 is an analysed result, each bend's
+// UNDECIDED decision its flag.
+TEST(ResultBlockFromReport, AnUndecidedReportKeepsItsCodeAndBendDecisions) {
+  v1::InspectionReport report;
+  report.set_result_seq(8);
+  report.set_result_code(static_cast<std::uint32_t>(regs::ResultCode::kUndecided));
+  report.mutable_deviation()->set_max(0.3);
+  auto* bend = report.add_bends();
+  bend->set_measured(true);
+  bend->set_decision(v1::UNDECIDED);
+  report.add_bends()->set_decision(v1::CONFORMING);
+  const ResultBlock block = result_block_from_report(report);
+  EXPECT_EQ(block.code, regs::ResultCode::kUndecided);
+  EXPECT_DOUBLE_EQ(block.max_deviation_mm, 0.3) << "analysed: the figures are shown";
+  ASSERT_EQ(block.bends.size(), 2u);
+  EXPECT_TRUE(block.bends[0].undecided);
+  EXPECT_FALSE(block.bends[1].undecided);
 }
 
 INSTANTIATE_TEST_SUITE_P(WordOrders, RegisterImageTest,

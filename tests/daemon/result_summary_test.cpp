@@ -69,6 +69,48 @@ TEST(ResultSummaryTest, HoldsTheIdsVerdictDeviationAndBendTable) {
   EXPECT_EQ(flanges.values(1).struct_value().fields().count("curl_radius_mm"), 0u);
 }
 
+// The decision, the rule that made it and each U travel with the result (issue 41); a report
+// without decisions (a failed scan) has no decision field, never a default read as a verdict.
+TEST(ResultSummaryTest, CarriesTheDecisionsAndTheirUncertainties) {
+  v1::InspectionReport r;
+  r.set_result_code(6);
+  r.mutable_verdict()->set_decision(v1::Verdict::UNDECIDED);
+  r.mutable_verdict()->set_decision_rule(v1::VerdictSettings::GUARD_BAND);
+  r.mutable_deviation()->set_p95(0.47);
+  r.mutable_deviation()->set_uncertainty_mm(0.05);
+  r.mutable_deviation()->set_decision(v1::UNDECIDED);
+  v1::Bend* b = r.add_bends();
+  b->set_springback_deg(0.98);
+  b->set_springback_uncertainty_deg(0.125);
+  b->set_angle_uncertainty_deg(0.25);
+  b->set_decision(v1::UNDECIDED);
+  v1::Segment* seg = r.add_segments();
+  seg->set_flatness_uncertainty_mm(0.03);
+  seg->set_curl_radius_mm(-300.0);
+  seg->set_curl_radius_uncertainty_mm(40.0);
+  seg->set_shape_decision(v1::CONFORMING);
+  const auto s = parse(result_summary_json(r, {}));
+  const auto& f = s.fields();
+  EXPECT_FALSE(f.at("pass").bool_value());
+  EXPECT_EQ(f.at("decision").string_value(), "UNDECIDED");
+  EXPECT_EQ(f.at("decision_rule").string_value(), "GUARD_BAND");
+  const auto& dev = f.at("deviation").struct_value().fields();
+  EXPECT_EQ(dev.at("uncertainty_mm").number_value(), 0.05);
+  EXPECT_EQ(dev.at("decision").string_value(), "UNDECIDED");
+  const auto& bend = f.at("bends").list_value().values(0).struct_value().fields();
+  EXPECT_EQ(bend.at("springback_uncertainty_deg").number_value(), 0.125);
+  EXPECT_EQ(bend.at("angle_uncertainty_deg").number_value(), 0.25);
+  EXPECT_EQ(bend.at("decision").string_value(), "UNDECIDED");
+  const auto& flange = f.at("flanges").list_value().values(0).struct_value().fields();
+  EXPECT_EQ(flange.at("flatness_uncertainty_mm").number_value(), 0.03);
+  EXPECT_EQ(flange.at("curl_radius_uncertainty_mm").number_value(), 40.0);
+  EXPECT_EQ(flange.at("shape_decision").string_value(), "CONFORMING");
+  v1::InspectionReport failed_scan;
+  failed_scan.set_result_code(3);
+  const auto none = parse(result_summary_json(failed_scan, {}));
+  EXPECT_EQ(none.fields().count("decision"), 0u);
+}
+
 TEST(ResultSummaryTest, EmptyReportAndNonFiniteNumbersStayValidJson) {
   v1::InspectionReport r;
   r.set_cycle_time_ms(std::numeric_limits<double>::quiet_NaN());

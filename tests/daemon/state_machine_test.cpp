@@ -124,6 +124,24 @@ TEST_F(MachineTest, TriggerHighAtStartIsIgnoredUntilItDrops) {
   EXPECT_TRUE(update().start.has_value());
 }
 
+// An UNDECIDED result raises PART_UNDECIDED, never PART_OK (even if a runner said pass), and
+// both drop with RESULT_ACK; the PLC's re-measure is an ordinary next trigger.
+TEST_F(MachineTest, UndecidedResultIsNeverPartOkAndClearsWithTheAck) {
+  update();
+  trigger(1, 1);
+  finish(regs::ResultCode::kUndecided, true);
+  EXPECT_TRUE(machine_.status().result_valid);
+  EXPECT_TRUE(machine_.status().part_undecided);
+  EXPECT_FALSE(machine_.status().part_ok);
+  pulse(&PlcControl::result_ack);
+  EXPECT_FALSE(machine_.status().part_undecided);
+  EXPECT_TRUE(machine_.status().ready);
+  trigger(1, 1);  // the re-measure
+  finish(regs::ResultCode::kOk, true);
+  EXPECT_TRUE(machine_.status().part_ok);
+  EXPECT_FALSE(machine_.status().part_undecided);
+}
+
 TEST_F(MachineTest, ResultNotAcknowledgedRejectsNextTrigger) {
   update();
   trigger(1, 1);

@@ -87,7 +87,7 @@ class PlaneScanner : public drivers::Scanner {
 /// "bend" whose springback is the tilt-free offset in degrees, for the bend table; one
 /// compensation vector per 100 points, opposite to the deviation.
 inline analysis::Expected<analysis::InspectionOutcome> plane_analysis(
-    const analysis::PointCloud& scan, double tolerance_mm) {
+    const analysis::PointCloud& scan, double tolerance_mm, double uncertainty_mm = 0.0) {
   if (scan.empty()) return analysis::fail("empty scan");
   analysis::InspectionOutcome outcome;
   v1::InspectionReport& r = outcome.report;
@@ -114,11 +114,18 @@ inline analysis::Expected<analysis::InspectionOutcome> plane_analysis(
     c->mutable_point()->set_x(scan.points[i].x());
     c->mutable_vector()->set_z(-scan.points[i].z());
   }
-  const bool pass = max_abs <= tolerance_mm;
+  // The guard band (analysis/inspection/conformity.hpp) on max |d| with U = uncertainty_mm.
+  const bool pass = max_abs <= tolerance_mm - uncertainty_mm;
+  const bool fail = max_abs > tolerance_mm + uncertainty_mm;
   r.mutable_verdict()->set_pass(pass);
+  r.mutable_verdict()->set_decision(pass   ? v1::Verdict::PASS
+                                    : fail ? v1::Verdict::FAIL
+                                           : v1::Verdict::UNDECIDED);
+  r.mutable_deviation()->set_uncertainty_mm(uncertainty_mm);
   if (!pass) {
-    r.mutable_verdict()->add_reasons("max deviation " + std::to_string(max_abs) +
-                                     " mm exceeds tolerance " + std::to_string(tolerance_mm));
+    r.mutable_verdict()->add_reasons("max deviation " + std::to_string(max_abs) + " mm " +
+                                     (fail ? "exceeds" : "undecided, within U of") + " tolerance " +
+                                     std::to_string(tolerance_mm));
   }
   outcome.deviation_cloud = scan;
   outcome.deviation_cloud.scalars.assign(scan.size(), hi);

@@ -179,6 +179,46 @@ TEST(HtmlReportAlone, PassingReportWithoutCloudSaysThePictureIsMissing) {
   EXPECT_NE(html->find("class='arrow'"), std::string::npos);
 }
 
+// An UNDECIDED report: its own banner and word, the rule that decided, each value with its U,
+// each bend's decision (issue 41).
+TEST(HtmlReportAlone, UndecidedShowsValuesWithTheirUAndEachDecision) {
+  auto f = testing::make_fixture(0);
+  v1::Verdict* verdict = f.report.mutable_verdict();
+  verdict->set_pass(false);
+  verdict->set_decision(v1::Verdict::UNDECIDED);
+  verdict->set_decision_rule(v1::VerdictSettings::GUARD_BAND);
+  v1::Bend* b1 = f.report.mutable_bends(0);
+  b1->set_springback_uncertainty_deg(0.125);
+  b1->set_angle_uncertainty_deg(0.25);
+  b1->set_decision(v1::UNDECIDED);
+  f.report.mutable_bends(1)->set_decision(v1::NONCONFORMING);
+  f.report.mutable_deviation()->set_uncertainty_mm(0.03);
+  f.report.mutable_deviation()->set_decision(v1::CONFORMING);
+  auto html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("class='banner undecided'"), std::string::npos);
+  EXPECT_NE(html->find("<div class='word'>UNDECIDED</div>"), std::string::npos);
+  EXPECT_NE(html->find("Decided by the guard band (ISO 14253-1)"), std::string::npos);
+  const std::string row1 = bend_row(*html, b1->id());
+  EXPECT_NE(html->find("<tr class='bend ud' id='bend-" + std::to_string(b1->id()) + "'"),
+            std::string::npos);
+  EXPECT_NE(row1.find(">89.60 &plusmn; 0.250"), std::string::npos) << row1;
+  EXPECT_NE(row1.find(">+0.40 &plusmn; 0.125<"), std::string::npos) << row1;
+  EXPECT_NE(row1.find(">UNDECIDED<"), std::string::npos) << row1;
+  EXPECT_NE(bend_row(*html, f.report.bends(1).id()).find(">FAIL<"), std::string::npos);
+  EXPECT_NE(html->find("U of the statistic judged (k = 2)</td><td class='num'>0.030 mm"),
+            std::string::npos);
+  EXPECT_NE(html->find("Surface criterion</td><td class='num'>CONFORMING"), std::string::npos);
+  // SIMPLE says so.
+  verdict->set_decision(v1::Verdict::PASS);
+  verdict->set_pass(true);
+  verdict->set_decision_rule(v1::VerdictSettings::SIMPLE);
+  html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok());
+  EXPECT_NE(html->find("class='banner pass'"), std::string::npos);
+  EXPECT_NE(html->find("Decided by the simple rule"), std::string::npos);
+}
+
 // The compensation arrows read against the deviation map: haloed, at a round drawing scale, with
 // a key arrow whose drawn length is to scale. The fixture's vectors lie in the section plane (the
 // view the figure picks), the longest 0.6 * sin(2 pi 14.5 / 60) = 0.599 mm long.

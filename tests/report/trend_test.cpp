@@ -213,6 +213,48 @@ TEST(TrendCharacteristics, FlangeShapeAndAngleSpread) {
   EXPECT_EQ(by_name.at("flange 2 twist")->values.size(), 3u);
 }
 
+// Each value keeps its U and its decision; the part decisions are counted; the page shows
+// value +- U, the median U and the undecided count (issue 41).
+TEST(TrendCharacteristics, CarryUncertaintiesAndDecisions) {
+  std::vector<v1::InspectionReport> reports;
+  const v1::Verdict::Decision decided[] = {v1::Verdict::PASS, v1::Verdict::UNDECIDED,
+                                           v1::Verdict::FAIL, v1::Verdict::UNDECIDED};
+  for (int k = 0; k < 4; ++k) {
+    auto r = make_report("1", k + 1, "2026-12-01T10:0" + std::to_string(k) + ":00Z",
+                         {0.9 + 0.05 * k}, 0.1, 0.2);
+    r.mutable_verdict()->set_decision(decided[k]);
+    r.mutable_bends(0)->set_springback_uncertainty_deg(0.125 + 0.125 * k);
+    r.mutable_bends(0)->set_decision(k == 0   ? v1::CONFORMING
+                                     : k == 2 ? v1::NONCONFORMING
+                                              : v1::UNDECIDED);
+    r.mutable_deviation()->set_uncertainty_mm(0.03);  // of p95: the default statistic
+    r.mutable_deviation()->set_decision(v1::CONFORMING);
+    reports.push_back(r);
+  }
+  reports.push_back(make_report("1", 5, "2026-12-01T10:05:00Z", {0.5}, 0.1, 0.2));  // no decision
+  const auto cs = collect_characteristics(reports);
+  std::map<std::string, const Characteristic*> by_name;
+  for (const auto& c : cs) by_name[c.name] = &c;
+  const Characteristic& bend = *by_name.at("bend 1 springback");
+  EXPECT_EQ(bend.uncertainties, (std::vector<double>{0.125, 0.25, 0.375, 0.5, 0.0}));
+  EXPECT_EQ(bend.undecided, 2u);
+  EXPECT_EQ(bend.nonconforming, 1u);
+  EXPECT_EQ(by_name.at("deviation p95")->uncertainties[0], 0.03);
+  EXPECT_EQ(by_name.at("deviation max |d|")->uncertainties[0], 0.0) << "not the statistic judged";
+  const DecisionCounts counts = decision_counts(reports);
+  EXPECT_EQ(counts.pass, 1u);
+  EXPECT_EQ(counts.fail, 1u);
+  EXPECT_EQ(counts.undecided, 2u);
+  EXPECT_EQ(counts.none, 1u);
+  TrendPageInfo info;
+  info.decisions = counts;
+  const std::string html = render_trend_html(cs, info);
+  EXPECT_NE(html.find("1 PASS, 1 FAIL, 2 UNDECIDED, 1 without a decision"), std::string::npos);
+  EXPECT_NE(html.find("0.9500 &plusmn; 0.2500 deg"), std::string::npos);
+  EXPECT_NE(html.find("<td>0.3750</td><td>2</td><td>1</td>"), std::string::npos)
+      << "median U of the values that have one, undecided, nonconforming";
+}
+
 class TrendFiles : public ::testing::Test {
  protected:
   void SetUp() override {

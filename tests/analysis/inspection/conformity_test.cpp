@@ -10,9 +10,7 @@
 #include <ostream>
 
 namespace springscan::analysis {
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 // Readable failures: the outcome's name, not its bytes.
 void PrintTo(Conformity c, std::ostream* os) { *os << to_string(c); }
@@ -32,10 +30,11 @@ TEST(Conformity, UpperLimitTable) {
   };
   // Limit 1.0 deg, U 0.1: conforming up to 0.9, nonconforming beyond 1.1 (ISO 14253-1).
   const Row rows[] = {
-      {0.0, 0.1, kC, kC},   {0.85, 0.1, kC, kC},  {0.9, 0.1, kC, kC},   {0.901, 0.1, kU, kC},
-      {0.99, 0.1, kU, kC},  {1.0, 0.1, kU, kC},   {1.01, 0.1, kU, kN},  {1.1, 0.1, kU, kN},
-      {1.101, 0.1, kN, kN}, {2.0, 0.1, kN, kN},   {0.99, 0.0, kC, kC},  {1.01, 0.0, kN, kN},
-      {0.99, 0.5, kU, kC},  {0.6, 0.5, kU, kC},  {0.4, 0.5, kC, kC},   {1.6, 0.5, kN, kN},   {1.0, 0.0, kC, kC},
+      {0.0, 0.1, kC, kC},   {0.85, 0.1, kC, kC}, {0.9, 0.1, kC, kC},  {0.901, 0.1, kU, kC},
+      {0.99, 0.1, kU, kC},  {1.0, 0.1, kU, kC},  {1.01, 0.1, kU, kN}, {1.1, 0.1, kU, kN},
+      {1.101, 0.1, kN, kN}, {2.0, 0.1, kN, kN},  {0.99, 0.0, kC, kC}, {1.01, 0.0, kN, kN},
+      {0.99, 0.5, kU, kC},  {0.6, 0.5, kU, kC},  {0.4, 0.5, kC, kC},  {1.6, 0.5, kN, kN},
+      {1.0, 0.0, kC, kC},
   };
   for (const Row& r : rows) {
     EXPECT_EQ(judge_at_most(r.value, r.u, 1.0, kGuard), r.guard) << r.value << " U " << r.u;
