@@ -34,26 +34,28 @@ struct BlockWriter {
   }
 };
 
-// Deviations and bends are only shown for an analysed part (RESULT_CODE 0, 1, 5).
+// Deviations and bends are only shown for an analysed part (RESULT_CODE 0, 1, 5, 6).
 bool analysed(std::uint32_t code) {
   using regs::ResultCode;
   return code == static_cast<std::uint32_t>(ResultCode::kOk) ||
          code == static_cast<std::uint32_t>(ResultCode::kFormNok) ||
-         code == static_cast<std::uint32_t>(ResultCode::kAmbiguous);
+         code == static_cast<std::uint32_t>(ResultCode::kAmbiguous) ||
+         code == static_cast<std::uint32_t>(ResultCode::kUndecided);
 }
 
 void put_bends(const v1::InspectionReport& report, BlockWriter& w) {
   const int bends = std::min(report.bends_size(), static_cast<int>(regs::kMaxBends));
-  std::uint16_t failed = 0;
+  std::uint16_t failed = 0, undecided = 0;
   w.at(regs::kIrBendCount) = static_cast<std::uint16_t>(bends);
   for (int j = 0; j < bends; ++j) {
     const v1::Bend& b = report.bends(j);
     const auto base = static_cast<std::uint16_t>(regs::kIrBendTable + j * regs::kBendRecordSize);
     w.at(base + regs::kBendId) = static_cast<std::uint16_t>(std::clamp(b.id(), 0, 65535));
     const bool measurable = !b.has_measurable() || b.measurable();
+    const bool is_undecided = b.decision() == v1::UNDECIDED;  // map version 6
     w.at(base + regs::kBendFlags) = static_cast<std::uint16_t>(
         (b.measured() ? regs::kBendMeasured : 0) | (b.pass() ? regs::kBendPass : 0) |
-        (measurable ? 0 : regs::kBendNotMeasurable));
+        (measurable ? 0 : regs::kBendNotMeasurable) | (is_undecided ? regs::kBendUndecided : 0));
     w.put32(static_cast<std::uint16_t>(base + regs::kBendSpringback), mdeg(b.springback_deg()));
     w.put32(static_cast<std::uint16_t>(base + regs::kBendMeasuredAngle),
             mdeg(b.measured_angle_deg()));
@@ -65,9 +67,11 @@ void put_bends(const v1::InspectionReport& report, BlockWriter& w) {
             mdeg(b.measured() && b.angle_along_bend_size() > 0 ? b.angle_spread_deg() : nan));
     w.put32(static_cast<std::uint16_t>(shape + regs::kBendMeasuredRadius),
             um(b.has_measured_radius_mm() ? b.measured_radius_mm() : nan));
-    if (b.measured() && !b.pass()) ++failed;
+    if (b.measured() && !b.pass() && !is_undecided) ++failed;
+    if (is_undecided) ++undecided;
   }
   w.at(regs::kIrBendsFailed) = failed;
+  w.at(regs::kIrBendsUndecided) = undecided;
 }
 
 std::string record_name(std::uint64_t record) {

@@ -115,7 +115,14 @@ void print_decimation(const analysis::MeshScanReduction& r) {
 // The verdict and the figures a quality engineer looks at first, on stdout.
 void print_summary(const v1::InspectionReport& report, const std::string& out_dir,
                    bool compensation_files) {
-  std::printf("verdict: %s\n", report.verdict().pass() ? "PASS" : "FAIL");
+  const v1::Verdict& verdict = report.verdict();
+  const bool undecided = verdict.decision() == v1::Verdict::UNDECIDED;
+  std::printf("verdict: %s (%s)\n",
+              verdict.pass() ? "PASS"
+              : undecided    ? "UNDECIDED: within the measurement uncertainty of a limit"
+                             : "FAIL",
+              verdict.decision_rule() == v1::VerdictSettings::SIMPLE ? "simple rule"
+                                                                     : "guard band, ISO 14253-1");
   for (const auto& reason : report.verdict().reasons()) std::printf("  - %s\n", reason.c_str());
   std::printf(
       "global fit: residual rms %.4f mm to the surface after %d iterations; deviation p95 "
