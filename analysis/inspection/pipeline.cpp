@@ -541,10 +541,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   attach_deviation_uncertainty(springback ? part_noise_mm(*springback) : fit_rms_residual_mm,
                                frame_u.repeat_translation_mm, part_extent_mm(out.deviation_cloud),
                                config->uncertainty, deviation->statistics);
-  report.mutable_deviation()->set_uncertainty_mm(config->verdict.deviation_statistic ==
-                                                         DeviationStatistic::kMax
-                                                     ? deviation->statistics.max_uncertainty_mm
-                                                     : deviation->statistics.p95_uncertainty_mm);
+  // deviation.uncertainty_mm: the verdict copies the U of the statistic it judged.
   timings.set_local_fits(ms_since(t));
 
   t = Clock::now();
