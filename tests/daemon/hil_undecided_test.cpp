@@ -59,10 +59,11 @@ class HilUndecidedTest : public HilTest {
         EXPECT_LE(v - u, tolerance_deg) << "bend " << b.id() << " " << v << " +- " << u;
         EXPECT_GE(v + u, tolerance_deg) << "bend " << b.id() << " " << v << " +- " << u;
       }
-      std::printf("[ undecided ] tolerance %.3f: result %u bend %d (true %.3f) springback %.4f "
-                  "+- %.4f deg: %s\n",
-                  tolerance_deg, cycle.result.seq, b.id(), kTruth[static_cast<std::size_t>(index[k])],
-                  b.springback_deg(), u, v1::Conformity_Name(b.decision()).c_str());
+      std::printf(
+          "[ undecided ] tolerance %.3f: result %u bend %d (true %.3f) springback %.4f "
+          "+- %.4f deg: %s\n",
+          tolerance_deg, cycle.result.seq, b.id(), kTruth[static_cast<std::size_t>(index[k])],
+          b.springback_deg(), u, v1::Conformity_Name(b.decision()).c_str());
     }
   }
 

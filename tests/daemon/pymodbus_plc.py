@@ -25,6 +25,8 @@ TRIGGER_ENABLE, TRIGGER, RESULT_ACK, ERROR_RESET = 0, 1, 2, 3
 # Discrete inputs (doc "Discrete inputs").
 READY, TRIG_ACK, BUSY, RESULT_VALID, PART_OK, ERROR, TRIGGER_REJECTED = 0, 1, 2, 3, 4, 5, 6
 SCANNER_ONLINE, HEARTBEAT_BIT, PLC_COMM_LOST, RESULT_STALE = 7, 8, 9, 10
+CALIBRATION_DRIFT, PART_UNDECIDED = 11, 12
+RESULT_CODE_UNDECIDED = 6
 # Holding registers.
 CONTROL_WORD, JOB_ID, PART_ID, PLC_HEARTBEAT, PAGE_SELECT, PART_SERIAL = 0, 1, 2, 3, 4, 5
 SERIAL_BASE = 70000  # PART_SERIAL = SERIAL_BASE + JOB_ID: above 16 bits, so both words count
@@ -73,9 +75,9 @@ class Plc:
         return reply.registers[:count]
 
     def inputs(self):
-        reply = self.client.read_discrete_inputs(0, 11)
+        reply = self.client.read_discrete_inputs(0, 13)
         check(not reply.isError(), "FC02: %s" % reply)
-        return reply.bits[:11]
+        return reply.bits[:13]
 
     def coil(self, address, value):
         reply = self.client.write_coil(address, value)
@@ -110,11 +112,11 @@ class Plc:
 
 def check_live_block(plc):
     live = plc.input_registers(0, 13)
-    check(live[MAP_VERSION] == 5, "MAP_VERSION %d, this client is written for 5" % live[0])
+    check(live[MAP_VERSION] == 6, "MAP_VERSION %d, this client is written for 6" % live[0])
     check(live[BOOT_ID] != 0, "BOOT_ID is never 0")
     check(live[ENDIAN_PROBE:ENDIAN_PROBE + 2] == [0x0102, 0x0304], "endianness probe (ABCD)")
     mirror = plc.holding_registers(10, 13)  # FC03 copy of input registers 0-12
-    check(mirror[MAP_VERSION] == 5 and mirror[BOOT_ID] == live[BOOT_ID], "live mirror at 10")
+    check(mirror[MAP_VERSION] == 6 and mirror[BOOT_ID] == live[BOOT_ID], "live mirror at 10")
     return live
 
 
@@ -201,6 +203,9 @@ def acknowledge(plc, result):
     bits = plc.inputs()
     check(bits[RESULT_VALID], "RESULT_VALID still 1 before RESULT_ACK")
     check(bits[PART_OK] == (result["code"] == 0), "PART_OK agrees with RESULT_CODE")
+    check(bits[PART_UNDECIDED] == (result["code"] == RESULT_CODE_UNDECIDED),
+          "PART_UNDECIDED agrees with RESULT_CODE")
+    check(not (bits[PART_OK] and bits[PART_UNDECIDED]), "never PART_OK and PART_UNDECIDED")
     plc.pulse(RESULT_ACK, RESULT_VALID, False, "RESULT_VALID = 0 after RESULT_ACK")
 
 
