@@ -31,6 +31,7 @@
 
 #include "tests/analysis/matching/field_truth.hpp"
 #include "tests/analysis/synthetic.hpp"
+#include "tests/simulators/parts/production_parts.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -50,13 +51,7 @@ struct Summary {
   double worst_frame_mm = 0.0, worst_field_p95_mm = 0.0;
 };
 
-const std::vector<std::string>& production_parts() {
-  static const std::vector<std::string> names = {
-      "openamr-MMP.03.00.00.003_Motor_bracket.step", "openamr-MMP.01.00.00.002_Cover_flange.step",
-      "openamr-MMP.00.00.00.003_Side_panel.step", "openamr-MMP.00.00.00.001_Front_panel.step",
-      "nema-17-bracket.step"};
-  return names;
-}
+using parts::testing::production_parts;  // the shared CAD folder's production parts
 
 // A random open profile: 2-5 flanges of 20-80 mm, turns of 60-100 deg either way, radii 1.5-5
 // mm, 40-120 mm wide; a surface or a 2 mm solid.

@@ -13,17 +13,12 @@
 #include <string>
 
 #include "tests/analysis/uncertainty/coverage_study.hpp"
+#include "tests/simulators/parts/production_parts.hpp"
 
 namespace springscan::analysis {
 namespace {
 
-const std::vector<std::string>& production_parts() {
-  static const std::vector<std::string> names = {
-      "openamr-MMP.03.00.00.003_Motor_bracket.step", "openamr-MMP.01.00.00.002_Cover_flange.step",
-      "openamr-MMP.00.00.00.003_Side_panel.step", "openamr-MMP.00.00.00.001_Front_panel.step",
-      "nema-17-bracket.step"};
-  return names;
-}
+using parts::testing::production_parts;  // the shared CAD folder's production parts
 
 int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
   std::printf("uncertainty_sweep --seed %llu --cases %d --production %d --points %lld\n",

@@ -171,8 +171,11 @@ std::int64_t GenicamCamera::fill(std::uint8_t* data, std::uint32_t width, std::u
     frame_in_pass_ = 0;
     ++scans_;
   }
-  // A lost frame: its lines pass under the head, its id is used, nothing of it arrives.
-  if (const int every = lose_every_.load(); every > 0 && (frame_in_pass_ + 1) % every == 0) {
+  // A lost frame: its lines pass under the head, its id is used, nothing of it arrives. Only
+  // frames of the part's lines are lost, so the count does not depend on how soon after the
+  // part the receiver stops the acquisition.
+  if (const int every = lose_every_.load();
+      every > 0 && (frame_in_pass_ + 1) % every == 0 && cursor_ < image_.lines) {
     cursor_ += height;
     ++frame_in_pass_;
     ++lost_;

@@ -61,8 +61,9 @@ struct GenicamCameraSettings {
   /// scan were sent.
   std::int64_t vanish_after_lines = -1;
   double return_after_s = -1.0;  ///< >= 0: a vanished camera is back after this long (healthy)
-  /// > 0: every this many frames of a pass, one is lost: its lines are skipped and its block
-  /// id never reaches the wire, so the receiver sees the gap in the ids a lost frame leaves.
+  /// > 0: every this many frames of a pass, one is lost (of the frames that hold the part's
+  /// lines): its lines are skipped and its block id never reaches the wire, so the receiver
+  /// sees the gap in the ids a lost frame leaves.
   int lose_every_nth_frame = 0;
 };
 
