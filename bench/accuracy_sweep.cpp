@@ -45,7 +45,8 @@ struct SweepOptions {
 };
 
 struct Summary {
-  int cases = 0, ambiguous = 0, ambiguous_passed = 0, bends = 0, measured = 0, off_by_1deg = 0;
+  int cases = 0, ambiguous = 0, ambiguous_but_shown = 0, ambiguous_passed = 0, bends = 0,
+      measured = 0, off_by_1deg = 0;
   int crashes = 0, skipped = 0;
   std::vector<double> bend_errors;
   double worst_frame_mm = 0.0, worst_field_p95_mm = 0.0;
@@ -160,6 +161,14 @@ void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summ
     // The station says it cannot tell the part from its turned copy: its bend table may be the
     // mirror image's, and the part must fail. Counted apart; a pass would be a wrong answer.
     ++sum.ambiguous;
+    // Whether the view could have told: scan points that lie off the part's settled half turn,
+    // from the construction (field_truth.hpp). A view that shows dozens of them is one the
+    // station should have decided (issue 32); none, and ambiguous is the right answer.
+    const int telling = testing::points_telling_the_half_turn(run, cad);
+    std::printf(
+        "  %d scan points tell it from its half turn about its least spread (construction)\n",
+        telling);
+    if (telling >= 20) ++sum.ambiguous_but_shown;
     for (const std::string& warning : report.warnings())
       if (options.only < 0 && warning.starts_with("global fit:"))
         std::printf("  %s\n", warning.c_str());
@@ -215,12 +224,13 @@ int run(const SweepOptions& options) {
                            ? 0.0
                            : *std::max_element(sum.bend_errors.begin(), sum.bend_errors.end());
   std::printf(
-      "summary: seed %llu, %d cases (%d not produced, %d reported ambiguous and failed, %d "
-      "crashed); in the others %d of %d bends measured, springback error median %.4f / worst "
+      "summary: seed %llu, %d cases (%d not produced, %d reported ambiguous and failed, %d of "
+      "them in a view that shows the half turn's difference, %d crashed); in the others %d of %d "
+      "bends measured, springback error median %.4f / worst "
       "%.4f deg, %d off by > 1 deg; result frame worst %.4f mm; field p95 worst %.4f mm\n",
       static_cast<unsigned long long>(options.seed), sum.cases + sum.skipped, sum.skipped,
-      sum.ambiguous, sum.crashes, sum.measured, sum.bends, median(sum.bend_errors), worst,
-      sum.off_by_1deg, sum.worst_frame_mm, sum.worst_field_p95_mm);
+      sum.ambiguous, sum.ambiguous_but_shown, sum.crashes, sum.measured, sum.bends,
+      median(sum.bend_errors), worst, sum.off_by_1deg, sum.worst_frame_mm, sum.worst_field_p95_mm);
   return sum.crashes == 0 && sum.off_by_1deg == 0 && sum.ambiguous_passed == 0 ? 0 : 1;
 }
 

@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <numbers>
 #include <set>
 #include <string>
@@ -327,6 +328,62 @@ inline FieldErrors field_errors(const FieldRun& run,
   e.p95_full = p95(full);
   e.vectors = full.size();
   return e;
+}
+
+// The part's half turn about its sheet normal, from the CAD alone: turned half round about the
+// axis of least spread of its samples through the centre of their bounding box, then settled on
+// the CAD as a best fit settles a rival orientation (point-to-plane updates with field_truth.hpp's
+// Eigen solver on the nearest CAD points, the farthest fifth left out).
+inline Transform settled_half_turn(const parts::CadPart& cad) {
+  const std::vector<Vec3>& samples = cad.model.samples.points;
+  Vec3 lo = samples.front(), hi = samples.front(), mean = Vec3::Zero();
+  for (const Vec3& p : samples) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+    mean += p;
+  }
+  mean /= static_cast<double>(samples.size());
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero();
+  for (const Vec3& p : samples) spread += (p - mean) * (p - mean).transpose();
+  const Vec3 normal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvectors().col(0);
+  const Vec3 centre = 0.5 * (lo + hi);
+  Transform turn = Eigen::Translation3d(centre) * Eigen::AngleAxisd(std::numbers::pi, normal) *
+                   Eigen::Translation3d(-centre);
+  const SurfaceDistance& distance = *exact_model(cad).distance;
+  std::vector<Vec3> turned;
+  for (const Vec3& p : samples) turned.push_back(turn * p);
+  for (int round = 0; round < 30; ++round) {
+    const std::vector<SurfaceHit> hits = closest_all(distance, turned);
+    std::vector<Vec3> feet(hits.size()), normals(hits.size());
+    for (std::size_t k = 0; k < hits.size(); ++k) {
+      feet[k] = hits[k].foot;
+      normals[k] = hits[k].normal;
+    }
+    const Transform step = true_result_frame(turned, feet, normals, 0.2, 0.2);
+    for (Vec3& p : turned) p = step * p;
+    turn = step * turn;
+  }
+  return turn;
+}
+
+// How many scan points can tell a near-symmetric part from its half turn, from the construction
+// alone: the CAD point each scan point is the image of (the simulator's, noise-free; outliers
+// left out) lies farther than 0.15 mm off the CAD once turned. The side panel's notched wall
+// (face 73) gives 39 such points in the passes tilted about the diagonal, its turned copy none
+// elsewhere; a view that leaves none cannot tell the two, and the part must be reported
+// ambiguous (production_parts_test.cpp; bench/accuracy_sweep counts ambiguous draws whose view
+// shows the asymmetry).
+inline int points_telling_the_half_turn(const FieldRun& run, const parts::CadPart& cad) {
+  static std::map<const parts::CadPart*, Transform> turns;
+  if (!turns.count(&cad)) turns.emplace(&cad, settled_half_turn(cad));
+  const Transform& turn = turns.at(&cad);
+  std::vector<Vec3> turned;
+  for (std::size_t i = 0; i < run.scan_cad_points.size(); ++i)
+    if (run.scan_faces[i] >= 0) turned.push_back(turn * run.scan_cad_points[i]);
+  int telling = 0;
+  for (const SurfaceHit& hit : closest_all(*exact_model(cad).distance, turned))
+    if (std::abs(hit.signed_distance_mm) > 0.15) ++telling;
+  return telling;
 }
 
 }  // namespace springscan::analysis::testing
