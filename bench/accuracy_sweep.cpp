@@ -1,7 +1,7 @@
 // Accuracy on fresh draws: every number of a case comes from the seed, so a run at a seed
 // nobody tuned to measures what the station does on parts it never saw (issue 39).
 //
-//   ./build/bench/accuracy_sweep --seed S [--cases N] [--points P]
+//   ./build/bench/accuracy_sweep --seed S [--cases N] [--points P] [--perfect]
 //
 // Each case draws a part (a random profile, L to five flanges, surface or 2 mm solid; or one of
 // the production solids of ../shared/data/cad), a springback per bend (0-3 deg, some exactly 0),
@@ -15,7 +15,10 @@
 // counted apart: its bends are not judged, but the part must fail. It fails (exit 1) only on a
 // crash, a bend off by more than 1 deg, or an ambiguous part passed: CI runs it at a seed derived
 // from the commit to report, without blocking, while accuracy is being fixed (docs/springback.md
-// keeps each landing's summary).
+// keeps each landing's summary). --perfect makes every part as drawn (no springback: the same
+// draws otherwise): the true result frame is then the identity, so each case prints its pose
+// error (rotation, largest shift over the part) and whether the verdict passed it, and the
+// summary counts the perfect parts that failed and the poses beyond 0.05 deg / 0.05 mm.
 #include <google/protobuf/text_format.h>
 
 #include <algorithm>
@@ -25,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,6 +45,7 @@ struct SweepOptions {
   int cases = 24;
   std::int64_t points = 200'000;
   int only = -1;                  ///< run this case alone (the draws before it are still made)
+  bool perfect = false;           ///< every springback 0: the part as the CAD, posed
   v1::AnalysisSettings settings;  ///< the analysis settings (--settings FILE.textproto)
 };
 
@@ -48,6 +53,8 @@ struct Summary {
   int cases = 0, ambiguous = 0, ambiguous_but_shown = 0, ambiguous_passed = 0, bends = 0,
       measured = 0, off_by_1deg = 0;
   int crashes = 0, skipped = 0;
+  int perfect_failed = 0, pose_beyond = 0;  ///< --perfect: verdicts not PASS; poses off 0.05
+  double worst_rotation_deg = 0.0;
   std::vector<double> bend_errors;
   double worst_frame_mm = 0.0, worst_field_p95_mm = 0.0;
 };
@@ -83,6 +90,24 @@ std::string describe(const parts::ProfileSpec& spec) {
   return out;
 }
 
+// --perfect: nothing sprang back, so the true result frame is the identity and every
+// characteristic conforms; the verdict must be PASS (issue 32: "perfect parts pass") and the pose
+// within 0.05 deg / 0.05 mm. A verdict other than PASS prints its reasons.
+void judge_perfect_part(const testing::FieldRun& run, Summary& sum) {
+  const double rotation_deg =
+      Eigen::AngleAxisd(run.T_result_part.linear()).angle() * 180.0 / std::numbers::pi;
+  sum.worst_rotation_deg = std::max(sum.worst_rotation_deg, rotation_deg);
+  const bool beyond = rotation_deg > 0.05 || run.frame_error_mm > 0.05;
+  sum.pose_beyond += beyond ? 1 : 0;
+  const auto& verdict = run.report.verdict();
+  std::printf("  perfect part: pose %.4f deg, %.4f mm%s; verdict %s\n", rotation_deg,
+              run.frame_error_mm, beyond ? " (beyond 0.05)" : "",
+              v1::Verdict::Decision_Name(verdict.decision()).c_str());
+  if (verdict.decision() == v1::Verdict::PASS) return;
+  ++sum.perfect_failed;
+  for (const std::string& reason : verdict.reasons()) std::printf("    %s\n", reason.c_str());
+}
+
 // One case: draw, produce, scan, analyse, print; adds to `sum`.
 void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summary& sum) {
   std::uniform_real_distribution<double> unit(0.0, 1.0), springback(0.0, 3.0);
@@ -104,6 +129,7 @@ void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summ
   for (std::size_t b = 0; b < cad.model.segmentation.bends.size(); ++b)
     sc.springback_deg.push_back(unit(rng) < 0.15 ? 0.0 : springback(rng));
   if (sc.springback_deg.empty()) sc.springback_deg.push_back(0.0);
+  if (options.perfect) std::fill(sc.springback_deg.begin(), sc.springback_deg.end(), 0.0);
   std::mt19937 pose_rng(static_cast<std::uint32_t>(rng()));
   sc.pose = testing::random_motion(pose_rng, 500.0);
   sc.tilt_axis_deg = production || unit(rng) < 0.5 ? 45.0 : 0.0;
@@ -179,6 +205,7 @@ void run_case(int index, std::mt19937_64& rng, const SweepOptions& options, Summ
     return;
   }
   sum.worst_frame_mm = std::max(sum.worst_frame_mm, run.frame_error_mm);
+  if (options.perfect) judge_perfect_part(run, sum);
   sum.worst_field_p95_mm = std::max(sum.worst_field_p95_mm, field.p95_full);
   for (const parts::BendTruth& truth : run.bends) {
     const auto it = std::find_if(report.bends().begin(), report.bends().end(),
@@ -231,6 +258,12 @@ int run(const SweepOptions& options) {
       static_cast<unsigned long long>(options.seed), sum.cases + sum.skipped, sum.skipped,
       sum.ambiguous, sum.ambiguous_but_shown, sum.crashes, sum.measured, sum.bends,
       median(sum.bend_errors), worst, sum.off_by_1deg, sum.worst_frame_mm, sum.worst_field_p95_mm);
+  if (options.perfect)
+    std::printf(
+        "perfect parts: %d of %d judged not PASS; pose worst %.4f deg / %.4f mm, %d beyond 0.05 "
+        "deg or 0.05 mm\n",
+        sum.perfect_failed, sum.cases - sum.ambiguous, sum.worst_rotation_deg, sum.worst_frame_mm,
+        sum.pose_beyond);
   return sum.crashes == 0 && sum.off_by_1deg == 0 && sum.ambiguous_passed == 0 ? 0 : 1;
 }
 
@@ -248,6 +281,8 @@ int main(int argc, char** argv) {
       options.cases = std::atoi(argv[++i]);
     } else if (arg == "--points" && has_value) {
       options.points = std::atoll(argv[++i]);
+    } else if (arg == "--perfect") {
+      options.perfect = true;
     } else if (arg == "--case" && has_value) {
       options.only = std::atoi(argv[++i]);
     } else if (arg == "--settings" && has_value) {
@@ -261,7 +296,7 @@ int main(int argc, char** argv) {
     } else {
       std::fprintf(stderr,
                    "usage: accuracy_sweep [--seed S] [--cases N] [--points P] [--case K] "
-                   "[--settings FILE]\n");
+                   "[--settings FILE] [--perfect]\n");
       return 2;
     }
   }
