@@ -53,7 +53,8 @@ struct Summary {
   int cases = 0, ambiguous = 0, ambiguous_but_shown = 0, ambiguous_passed = 0, bends = 0,
       measured = 0, off_by_1deg = 0;
   int crashes = 0, skipped = 0;
-  int perfect_failed = 0, pose_beyond = 0;  ///< --perfect: verdicts not PASS; poses off 0.05
+  int perfect_failed = 0, perfect_undecided = 0;  ///< --perfect: verdicts FAIL / UNDECIDED
+  int pose_beyond = 0;                            ///< --perfect: poses off by more than 0.05
   double worst_rotation_deg = 0.0;
   std::vector<double> bend_errors;
   double worst_frame_mm = 0.0, worst_field_p95_mm = 0.0;
@@ -104,7 +105,8 @@ void judge_perfect_part(const testing::FieldRun& run, Summary& sum) {
               run.frame_error_mm, beyond ? " (beyond 0.05)" : "",
               v1::Verdict::Decision_Name(verdict.decision()).c_str());
   if (verdict.decision() == v1::Verdict::PASS) return;
-  ++sum.perfect_failed;
+  if (verdict.decision() == v1::Verdict::FAIL) ++sum.perfect_failed;
+  if (verdict.decision() == v1::Verdict::UNDECIDED) ++sum.perfect_undecided;
   for (const std::string& reason : verdict.reasons()) std::printf("    %s\n", reason.c_str());
 }
 
@@ -260,10 +262,10 @@ int run(const SweepOptions& options) {
       median(sum.bend_errors), worst, sum.off_by_1deg, sum.worst_frame_mm, sum.worst_field_p95_mm);
   if (options.perfect)
     std::printf(
-        "perfect parts: %d of %d judged not PASS; pose worst %.4f deg / %.4f mm, %d beyond 0.05 "
-        "deg or 0.05 mm\n",
-        sum.perfect_failed, sum.cases - sum.ambiguous, sum.worst_rotation_deg, sum.worst_frame_mm,
-        sum.pose_beyond);
+        "perfect parts: %d of %d FAILED (a false decision), %d UNDECIDED; pose worst %.4f deg / "
+        "%.4f mm, %d beyond 0.05 deg or 0.05 mm\n",
+        sum.perfect_failed, sum.cases - sum.ambiguous, sum.perfect_undecided,
+        sum.worst_rotation_deg, sum.worst_frame_mm, sum.pose_beyond);
   return sum.crashes == 0 && sum.off_by_1deg == 0 && sum.ambiguous_passed == 0 ? 0 : 1;
 }
 

@@ -170,12 +170,18 @@ FlangeVerdict judge_flange(const FlangeShapeSummary& f, const VerdictSettings& s
 
 void check_health(const VerdictInput& in, const VerdictSettings& s, VerdictResult& out,
                   Tally& tally) {
-  const std::size_t before = out.reasons.size();
   const FieldCoverage& field = in.field;
+  // Too little of the part in the scan is no evidence against it: what the scan shows may all
+  // conform, and the rest cannot be judged. UNDECIDED (re-measure, then a manual check), as an
+  // unmeasured bend; a FAIL would scrap good parts whose view is short (issue 32: perfectly made
+  // parts seen from one side covered 0.80-0.89 of the model and failed).
   if (field.model_points > 0 && !(field.coverage >= s.min_coverage)) {
     out.reasons.push_back("deformation field coverage " + fixed2(field.coverage) + " < minimum " +
-                          fixed2(s.min_coverage) + " (" + field.method + ")");
+                          fixed2(s.min_coverage) + " (" + field.method +
+                          "): the part is not all in the scan (undecided)");
+    tally.undecided = true;
   }
+  const std::size_t before = out.reasons.size();
   // The residual to the surface, not rms_final (to the nearest model sample): the latter grows
   // with the spacing of the samples, so a large, perfectly made part would fail.
   const double rms = in.fit_rms_residual_mm;

@@ -153,12 +153,22 @@ TEST(Verdict, AnalysisHealth) {
   auto in = good_input();
   in.field.coverage = 0.72;
   in.fit_rms_residual_mm = 1.32;
-  const auto v = decide_verdict(in);
+  auto v = decide_verdict(in);
   EXPECT_FALSE(v.pass);
+  EXPECT_EQ(v.decision, PartDecision::kFail);
   ASSERT_EQ(v.reasons.size(), 2u);
-  EXPECT_EQ(v.reasons[0], "deformation field coverage 0.72 < minimum 0.90 (min_cost_matching)");
+  EXPECT_EQ(v.reasons[0],
+            "deformation field coverage 0.72 < minimum 0.90 (min_cost_matching): the part is not "
+            "all in the scan (undecided)");
   EXPECT_EQ(v.reasons[1],
             "global fit residual rms 1.32 mm > limit 1.00 mm: the analysis cannot be trusted");
+  // Coverage short alone: what the scan shows conforms, the rest is not measured. No evidence
+  // against the part, so UNDECIDED, never FAIL (nor PASS).
+  in.fit_rms_residual_mm = 0.03;
+  v = decide_verdict(in);
+  EXPECT_FALSE(v.pass);
+  EXPECT_EQ(v.decision, PartDecision::kUndecided);
+  EXPECT_EQ(v.reasons.size(), 1u);
   // No field computed: coverage is not judged.
   in = good_input();
   in.field.model_points = 0;
