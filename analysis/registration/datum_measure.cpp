@@ -23,6 +23,7 @@ constexpr double kMadToSigma = 1.4826;  // median absolute deviation of a normal
 constexpr int kRobustRounds = 4;
 constexpr double kNone = std::numeric_limits<double>::infinity();  // no point in a stretch
 constexpr std::size_t kRimSectors = 24;  // a hole's rim: sectors of 15 deg
+constexpr double kRimReachMm = 3.0;      // the skin around a rim is gathered this far out
 constexpr double kRimStretchMm = 2.0;    // a slot's straight rims: stretches this long
 constexpr int kRimStretches = 3;         // ... at least this many per edge
 
@@ -226,21 +227,60 @@ CircleFit robust_circle(const std::vector<Vec2>& pts, const std::string& seen,
 }
 
 // The rim of an outline on the seen skin from the skin's points beyond it: per stretch of the
-// outline `arc` mm long, the innermost point lies beyond the rim by the gap of an even spread of
-// points (density 1 / spacing^2) to its first point, 1 / (density x arc) on average; that mean
-// is taken off. Few long stretches: the centre's scatter grows with the root of their number.
+// outline `arc` mm long, the innermost point lies beyond the rim by a gap, and the mean gap is
+// taken off. An even random spread of points (density 1 / spacing^2) gives 1 / (density x arc);
+// a laser's lines do not (points in rows: smaller gaps, by the rows' direction to the rim; a
+// sparse scan of a bracket's 6 mm hole came out 0.4 mm small by the model). So the mean gap is
+// measured on the seen skin itself (skin_gap), the model only where too little skin is seen.
 double rim_gap_mean(double spacing, double arc) { return spacing * spacing / arc; }
 
+// The gap measured: the same innermost rule at a line kGapLineMm beyond the outline, inside the
+// whole skin around it. Each skin point by how far beyond the outline it lies and the stretch
+// (of the rims' length) it is in.
+struct GapSample {
+  double beyond = 0.0;
+  std::size_t stretch = 0;
+};
+constexpr double kGapLineMm = 1.0;
+constexpr std::size_t kGapStretchesNeeded = 6;
+
+// The mean over stretches with skin on both sides of the line of the first point's distance
+// past it (within `reach`); `fallback` where fewer than kGapStretchesNeeded such stretches.
+double skin_gap(const std::vector<GapSample>& samples, std::size_t stretches, double reach,
+                double fallback) {
+  std::vector<double> first(stretches, kNone);
+  std::vector<char> skin_before(stretches, 0);
+  for (const GapSample& g : samples) {
+    if (g.stretch >= stretches) continue;
+    if (g.beyond < kGapLineMm) {
+      // The skin between the rim's reach and the line: the stretch lies in whole skin.
+      if (g.beyond >= 0.5 * kGapLineMm) skin_before[g.stretch] = 1;
+    } else if (g.beyond <= kGapLineMm + reach) {
+      first[g.stretch] = std::min(first[g.stretch], g.beyond - kGapLineMm);
+    }
+  }
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < stretches; ++k)
+    if (skin_before[k] && first[k] != kNone) sum += first[k], ++n;
+  return n >= kGapStretchesNeeded ? sum / static_cast<double>(n) : fallback;
+}
+
 // The rim of a hole: per sector (kRimSectors), the innermost skin point within band of it, at
-// its radius less the mean gap.
+// its radius less the mean gap (measured at a circle kGapLineMm outside, in sectors of the same
+// arc; `reach` beyond it).
 std::vector<Vec2> rim_points(const Datum& d, const FeaturePoints& near, double band, double gap,
                              double spacing, const Vec3& e1, const Vec3& e2) {
   const double r0 = 0.5 * d.diameter_mm;
   const double width = 2.0 * std::numbers::pi / kRimSectors;
-  const double mean_gap = rim_gap_mean(spacing, width * r0);
+  const double arc = width * r0;
+  const double r_line = r0 + kGapLineMm;
+  const auto line_sectors = static_cast<std::size_t>(2.0 * std::numbers::pi * r_line / arc);
+  const double reach = std::min(gap, kRimReachMm - kGapLineMm);
   std::array<double, kRimSectors> inner;
   inner.fill(std::numeric_limits<double>::infinity());
   std::array<Vec2, kRimSectors> rim{};
+  std::vector<GapSample> samples;
   // Without normals a solid's wall points just under the rim would count as the skin's: the skin
   // band narrowed to the wall points' margin.
   const double skin =
@@ -250,11 +290,18 @@ std::vector<Vec2> rim_points(const Datum& d, const FeaturePoints& near, double b
     if (std::abs(v.dot(d.normal)) > skin || !facing(near, i, d.normal, kSkinNormal)) continue;
     const Vec2 uv(v.dot(e1), v.dot(e2));
     const double rho = uv.norm();
-    if (rho < r0 - band || rho > r0 + band + gap) continue;
+    if (rho < r0 - band) continue;
     const double a = std::atan2(uv.y(), uv.x()) + std::numbers::pi;
+    if (rho >= r0 + 0.5 * kGapLineMm && rho <= r_line + reach && line_sectors > 0)
+      samples.push_back(
+          {rho - r0, std::min(line_sectors - 1,
+                              static_cast<std::size_t>(a / (2.0 * std::numbers::pi) *
+                                                       static_cast<double>(line_sectors)))});
+    if (rho > r0 + band + gap) continue;
     const auto k = std::min<std::size_t>(kRimSectors - 1, static_cast<std::size_t>(a / width));
     if (rho < inner[k]) inner[k] = rho, rim[k] = uv;
   }
+  const double mean_gap = skin_gap(samples, line_sectors, reach, rim_gap_mean(spacing, arc));
   std::vector<Vec2> pts;
   for (std::size_t k = 0; k < kRimSectors; ++k)
     if (std::isfinite(inner[k])) pts.push_back(rim[k] * (1.0 - mean_gap / inner[k]));
@@ -280,7 +327,6 @@ std::vector<Vec2> wall_points(const Datum& d, const FeaturePoints& near, double 
 // The rim's reach past the nominal: kRimGapSpacings point spacings (at least kRimGapMinMm).
 constexpr double kRimGapSpacings = 4.0;
 constexpr double kRimGapMinMm = 0.3;
-constexpr double kRimReachMm = 3.0;     // the skin's density is taken this far out
 constexpr int kPartialWallSectors = 4;  // a wall of 120 deg still adds to a rim
 constexpr int kRimSectorsNeeded = 9;    // a rim (seen all round on the seen skin) over 270 deg
 // A circle this much wider or narrower than the hole (or 5 %) is something else: a sheet's
@@ -421,10 +467,11 @@ FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, 
   const double gap = rim_gap(d, near, skin_band, spacing);
   // Long stretches (the innermost point's gap shrinks with the stretch), at least kRimStretches.
   const int bins = std::max(kRimStretches, static_cast<int>(2.0 * straight / kRimStretchMm));
-  const double mean_gap = rim_gap_mean(spacing, 2.0 * straight / bins);
   const double rim_band = near.normals.empty() ? std::min(skin_band, kSkinMarginMm) : skin_band;
+  const double reach = std::min(gap, kRimReachMm - kGapLineMm);
   std::array<std::vector<double>, 2> wall, inner;
   for (auto& v : inner) v.assign(static_cast<std::size_t>(bins), kNone);
+  std::vector<GapSample> samples;  // the gap measured at lines kGapLineMm beyond both edges
   for (std::size_t i = 0; i < near.points.size(); ++i) {
     const Vec3 v = near.points[i] - d.point;
     const double h = v.dot(d.normal), a = v.dot(along), u = v.dot(d.direction);
@@ -434,11 +481,17 @@ FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, 
         std::abs(std::abs(u) - half_width) <= band && on_wall(near, i, d.normal))
       wall[k].push_back(u);
     if (std::abs(h) > rim_band || !facing(near, i, d.normal, kSkinNormal)) continue;
-    if (std::abs(u) < half_width - band || std::abs(u) > half_width + band + gap) continue;
+    if (std::abs(u) < half_width - band) continue;
     const auto bin = std::min(static_cast<std::size_t>(bins - 1),
                               static_cast<std::size_t>((a + straight) / (2.0 * straight) * bins));
+    if (std::abs(u) >= half_width + 0.5 * kGapLineMm &&
+        std::abs(u) <= half_width + kGapLineMm + reach)
+      samples.push_back({std::abs(u) - half_width, k * static_cast<std::size_t>(bins) + bin});
+    if (std::abs(u) > half_width + band + gap) continue;
     if (std::abs(u) < std::abs(inner[k][bin])) inner[k][bin] = u;
   }
+  const double mean_gap = skin_gap(samples, 2 * static_cast<std::size_t>(bins), reach,
+                                   rim_gap_mean(spacing, 2.0 * straight / bins));
   // Per stretch along each straight edge, the innermost skin point less the mean gap.
   std::array<std::vector<double>, 2> rim;
   for (std::size_t k = 0; k < 2; ++k)

@@ -135,11 +135,16 @@ v1::AnalysisSettings datum_settings(const RootDatums& d) {
 Transform placement(std::mt19937& rng) {
   std::uniform_real_distribution<double> turn(-std::numbers::pi, std::numbers::pi), tilt(-0.1, 0.1),
       shift(-200.0, 200.0);
+  // Drawn in sequence, in g++'s order (an operator's operands and a call's arguments are
+  // unsequenced: clang placed the parts elsewhere; tests/analysis/synthetic.hpp).
+  const double a = turn(rng);
+  const double b = tilt(rng);
+  const double y = shift(rng);
+  const double x = shift(rng);
   Transform T = Transform::Identity();
-  T.linear() =
-      (Eigen::AngleAxisd(tilt(rng), Vec3::UnitX()) * Eigen::AngleAxisd(turn(rng), Vec3::UnitZ()))
-          .toRotationMatrix();
-  T.translation() = Vec3(shift(rng), shift(rng), 300.0);
+  T.linear() = (Eigen::AngleAxisd(b, Vec3::UnitX()) * Eigen::AngleAxisd(a, Vec3::UnitZ()))
+                   .toRotationMatrix();
+  T.translation() = Vec3(x, y, 300.0);
   return T;
 }
 

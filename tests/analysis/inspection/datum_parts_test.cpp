@@ -242,7 +242,10 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
   ls.T_scan_part = Transform::Identity();
   ls.T_scan_part.linear() = Eigen::AngleAxisd(turn(rng), Vec3::UnitZ()).toRotationMatrix() *
                             Eigen::AngleAxisd(0.05, Vec3::UnitX()).toRotationMatrix();
-  ls.T_scan_part.translation() = Vec3(shift(rng), shift(rng), 300.0);
+  // In sequence, g++'s order (a call's arguments are unsequenced; tests/analysis/synthetic.hpp).
+  const double y = shift(rng);
+  const double x = shift(rng);
+  ls.T_scan_part.translation() = Vec3(x, y, 300.0);
   PointCloud scan;
   for (std::size_t k = 0; k < v.directions.size(); ++k) {
     ls.view_direction = R * v.directions[k];
@@ -281,15 +284,13 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
 class DatumOwnPart : public ::testing::TestWithParam<int> {};
 
 TEST_P(DatumOwnPart, FrameWithinBoundsOfTheConstruction) {
-  // Under a sanitizer the scans are a sixth as dense (40,000 points), and a 6 mm hole's rim is
-  // then found 5.6 mm across and refused: the Release suite holds the accuracy.
-  if (testing::kUnderSanitizer) GTEST_SKIP() << "accuracy at full density: the Release suite";
   struct Condition {
     std::string view;
     bool noisy;
   };
   std::vector<Condition> conditions = {
       {"one-sided", false}, {"tilted", true}, {"all-round", false}, {"one-sided", true}};
+  if (testing::kUnderSanitizer) conditions.resize(1);
   unsigned seed = 10 * static_cast<unsigned>(GetParam());
   {
     const OwnPart p = own_parts()[static_cast<std::size_t>(GetParam())];
