@@ -114,6 +114,12 @@ PlcError plc_error_for_analysis(analysis::ErrorCode code) {
   return {regs::ErrorCode::kAnalysisFailed, D::kOther};
 }
 
+std::optional<PlcError> plc_error_for_alignment(const v1::Alignment& alignment) {
+  // A report without an alignment section (achieved unset) names no datum: not a failure.
+  if (alignment.achieved() || alignment.failed_datum().empty()) return std::nullopt;
+  return PlcError{regs::ErrorCode::kAnalysisFailed, regs::ErrorDetail::kDatumNotMeasurable};
+}
+
 JobRunner::JobRunner(drivers::Scanner& scanner, AnalyzeFn analyze, ReportStore& store, Log& log,
                      RunnerSettings settings)
     : scanner_(scanner),
@@ -258,7 +264,15 @@ void JobRunner::run(const RunnerJob& job) {
   JobEnd end{code, pass, false, regs::ErrorCode::kNone, regs::ErrorDetail::kNone};
   std::string verdict = pass ? "PASS" : undecided ? "UNDECIDED" : "FAIL";
   for (const auto& reason : outcome->report.verdict().reasons()) verdict += "; " + reason;
-  log_.info(name + ": " + verdict);
+  // No datum frame: the result stands (its verdict never PASS), the station faults with why.
+  if (const auto plc = plc_error_for_alignment(outcome->report.alignment())) {
+    end.error_code = plc->code;
+    end.error_detail = plc->detail;
+    log_.error(name + ": " + verdict + " (ERROR_DETAIL " +
+               std::to_string(static_cast<int>(plc->detail)) + ")" + operator_hint(plc->code));
+  } else {
+    log_.info(name + ": " + verdict);
+  }
   std::optional<v1::CheckResult> check = check_part(job, outcome->report);
   RunnerEvent event = finish(job, std::move(*outcome), end);
   // Only a persisted comparison changes CALIBRATION_DRIFT: its report is the evidence.

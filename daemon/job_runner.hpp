@@ -121,5 +121,9 @@ PlcError plc_error_for_scan(analysis::ErrorCode code);
 /// ERROR_CODE / ERROR_DETAIL for a failed analysis, from the code of the AnalyzeFn's error:
 /// files and settings of the part (the only files an analysis reads) give 4, the rest 3.
 PlcError plc_error_for_analysis(analysis::ErrorCode code);
+/// ERROR_CODE / ERROR_DETAIL beside an analysed part's result: a datum that could not be
+/// measured (`alignment` not achieved, its datum named) gives 3 / 10, the part's result stays
+/// its verdict (never PASS); none otherwise.
+std::optional<PlcError> plc_error_for_alignment(const v1::Alignment& alignment);
 
 }  // namespace springscan::daemon

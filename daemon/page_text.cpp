@@ -62,6 +62,8 @@ const char* detail_text(regs::ErrorDetail detail) {
       return "the scanner reported a fault";
     case regs::ErrorDetail::kOther:
       return "other cause: see the journal";
+    case regs::ErrorDetail::kDatumNotMeasurable:
+      return "a datum could not be measured: check the part's seat in the fixture";
   }
   return "";
 }

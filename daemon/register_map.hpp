@@ -214,6 +214,9 @@ enum class ErrorDetail : std::uint16_t {
   kProtocolError = 7,    ///< the device broke the protocol (kProtocolError)
   kDeviceFault = 8,      ///< the device reported an error, e.g. sensor fault (kDeviceFault)
   kOther = 9,            ///< any other cause (kOsError, a config mismatch, ...)
+  /// With ERROR_CODE 3 beside a stored NOK result: a datum of the part's alignment could not be
+  /// measured (report alignment.failed_datum), the results are in the best-fit frame.
+  kDatumNotMeasurable = 10,
 };
 
 /// REJECT_CODE register: why the last trigger edge was refused (no Modbus exception is sent).

@@ -25,9 +25,24 @@ class RunnerTest : public ::testing::Test {
                 -> analysis::Expected<analysis::InspectionOutcome> {
               last_part_ = part;
               if (fail_analysis_) return *fail_analysis_;
-              return testing::plane_analysis(scan, 0.1, uncertainty_mm_);
+              auto outcome = testing::plane_analysis(scan, 0.1, uncertainty_mm_);
+              if (outcome && !lost_datum_.empty()) lose_datum(outcome->report);
+              return outcome;
             },
             store_, log_, RunnerSettings{"test-station", 0.05, {}}) {}
+
+  /// What the pipeline reports when a datum cannot be measured (pipeline.cpp, result_frame):
+  /// the alignment not achieved with the datum named, the verdict FAIL.
+  void lose_datum(v1::InspectionReport& report) const {
+    v1::Alignment& a = *report.mutable_alignment();
+    a.set_method("best_fit");
+    a.set_achieved(false);
+    a.set_failed_datum(lost_datum_);
+    a.set_failure("datum '" + lost_datum_ + "' (hole) cannot be measured: 0 scan points");
+    report.mutable_verdict()->set_pass(false);
+    report.mutable_verdict()->set_decision(v1::Verdict::FAIL);
+    report.mutable_verdict()->add_reasons("alignment: " + a.failure());
+  }
 
   /// Starts a job and waits (poll on wake_fd) until it finished; returns the kFinished event.
   RunnerEvent run_job(std::uint64_t record, std::uint16_t part) {
@@ -52,6 +67,7 @@ class RunnerTest : public ::testing::Test {
   std::optional<analysis::Error> fail_analysis_;  // set before run_job
   bool acquired_ = false;
   double uncertainty_mm_ = 0.0;  // the fake analysis's U of max |d|
+  std::string lost_datum_;       // set: the fake analysis could not measure this datum
   JobRunner runner_;
 };
 
@@ -109,6 +125,48 @@ TEST_F(RunnerTest, PartWithinUOfItsToleranceIsUndecided) {
   // Beyond by more than U: FAIL as before.
   scanner_.offset_mm = 0.2;
   EXPECT_EQ(run_job(2, 3).end.result_code, regs::ResultCode::kFormNok);
+}
+
+// A datum not measurable: the result is stored and announced as the verdict made it (NOK, in
+// the best-fit frame), and the PLC gets ERROR_CODE 3 with ERROR_DETAIL 10 (a FAULT) beside it.
+TEST_F(RunnerTest, DatumNotMeasurableIsANokResultWithItsErrorDetail) {
+  scanner_.offset_mm = 0.05;  // within tolerance: the datum alone makes the part NOK
+  lost_datum_ = "B";
+  const RunnerEvent e = run_job(1, 3);
+  EXPECT_TRUE(e.end.persisted);
+  EXPECT_EQ(e.end.result_code, regs::ResultCode::kFormNok);
+  EXPECT_FALSE(e.end.part_ok);
+  EXPECT_EQ(e.end.error_code, regs::ErrorCode::kAnalysisFailed);
+  EXPECT_EQ(e.end.error_detail, regs::ErrorDetail::kDatumNotMeasurable);
+  EXPECT_EQ(static_cast<int>(e.end.error_detail), 10);  // the register map's number
+  auto latest = store_.load_latest();
+  EXPECT_EQ((*latest)->alignment().failed_datum(), "B");
+  EXPECT_FALSE((*latest)->verdict().pass());
+  // The station's registers: a valid NOK result, and the fault with its detail.
+  InspectionMachine machine(MachineSettings{}, Clock::now());
+  machine.on_job_finished(e.end, Clock::now());
+  EXPECT_TRUE(machine.status().result_valid);
+  EXPECT_FALSE(machine.status().part_ok);
+  EXPECT_EQ(machine.status().error_code, regs::ErrorCode::kAnalysisFailed);
+  EXPECT_EQ(machine.status().error_detail, regs::ErrorDetail::kDatumNotMeasurable);
+  // Measurable again: no error beside the next result.
+  lost_datum_.clear();
+  const RunnerEvent next = run_job(2, 3);
+  EXPECT_EQ(next.end.result_code, regs::ResultCode::kOk);
+  EXPECT_EQ(next.end.error_code, regs::ErrorCode::kNone);
+}
+
+TEST(PlcErrorMapping, OnlyANamedDatumNotMeasuredIsAnError) {
+  v1::Alignment a;
+  EXPECT_FALSE(plc_error_for_alignment(a));  // no alignment section (a report before datums)
+  a.set_achieved(true);
+  EXPECT_FALSE(plc_error_for_alignment(a));
+  a.set_achieved(false);
+  a.set_failed_datum("A2");
+  const auto e = plc_error_for_alignment(a);
+  ASSERT_TRUE(e);
+  EXPECT_EQ(*e,
+            (PlcError{regs::ErrorCode::kAnalysisFailed, regs::ErrorDetail::kDatumNotMeasurable}));
 }
 
 TEST_F(RunnerTest, UnplugDuringScanIsAFaultWithAStoredReasonThenNextJobPasses) {
