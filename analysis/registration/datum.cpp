@@ -3,6 +3,7 @@
 #include "analysis/registration/datum.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -112,6 +113,56 @@ double flange_thickness(const Datum& d, const PartModel& model) {
   return 0.0;
 }
 
+// The datums' spheres (scan frame) on a coarse grid over their box: per cell, the datums whose
+// sphere reaches into it, so that a point is tested against those only (most of a scan lies
+// near no datum: 5 sphere tests per point were most of the pass over 1M points).
+class SphereGrid {
+ public:
+  SphereGrid(const std::vector<Vec3>& centres, const std::vector<double>& radii) {
+    lo_ = hi_ = centres.front();
+    for (std::size_t k = 0; k < centres.size(); ++k) {
+      lo_ = lo_.cwiseMin(centres[k] - Vec3::Constant(radii[k]));
+      hi_ = hi_.cwiseMax(centres[k] + Vec3::Constant(radii[k]));
+    }
+    const Vec3 size = hi_ - lo_;
+    cell_ = std::max(kMinCellMm, std::cbrt(size.prod() / kMaxCells));
+    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, static_cast<int>(std::ceil(size(a) / cell_)));
+    masks_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2], 0);
+    for (std::size_t k = 0; k < centres.size(); ++k)
+      for (int z = 0; z < n_[2]; ++z)
+        for (int y = 0; y < n_[1]; ++y)
+          for (int x = 0; x < n_[0]; ++x) {
+            const Vec3 box_lo = lo_ + cell_ * Vec3(x, y, z);
+            const Vec3 nearest =
+                centres[k].cwiseMax(box_lo).cwiseMin(box_lo + Vec3::Constant(cell_));
+            if ((nearest - centres[k]).squaredNorm() <= radii[k] * radii[k])
+              masks_[index(x, y, z)] |= std::uint64_t{1} << k;
+          }
+  }
+
+  /// The datums whose sphere reaches the cell of `p` (a bit each), 0 outside the box.
+  std::uint64_t at(const Vec3& p) const {
+    if ((p.array() < lo_.array()).any() || (p.array() >= hi_.array()).any()) return 0;
+    const Vec3 c = (p - lo_) / cell_;
+    return masks_[index(std::min(static_cast<int>(c.x()), n_[0] - 1),
+                        std::min(static_cast<int>(c.y()), n_[1] - 1),
+                        std::min(static_cast<int>(c.z()), n_[2] - 1))];
+  }
+
+  static constexpr std::size_t kMaxDatums = 64;
+
+ private:
+  static constexpr double kMinCellMm = 1.0;
+  static constexpr double kMaxCells = 32768.0;
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * n_[1] + y) * n_[0] + x;
+  }
+  Vec3 lo_, hi_;
+  double cell_ = 1.0;
+  int n_[3] = {1, 1, 1};
+  std::vector<std::uint64_t> masks_;
+};
+
 // Per datum, the scan points (scan frame, with their normals) within `reach` of its point in
 // the frame `T`: one pass over the scan (each datum's sphere carried into the scan frame)
 // before the first round, copied once so that the rounds read them in order (an index into
@@ -130,36 +181,58 @@ std::vector<FeaturePoints> within_reach(const std::vector<Vec3>& scan,
     r2.push_back(reach[k] * reach[k]);
   }
   const std::size_t count = (scan.size() + stride - 1) / stride;
-  std::vector<std::vector<std::vector<std::uint32_t>>> blocks(block_count(count));
+  // Each block copies its points while they are in cache (an index kept and the point read
+  // again after the pass missed the cache per point).
+  std::vector<std::vector<FeaturePoints>> blocks(block_count(count));
+  std::optional<SphereGrid> grid;
+  if (datums.size() <= SphereGrid::kMaxDatums) grid.emplace(centres, reach);
   parallel_blocks(count, threads, [&](std::size_t b, std::size_t begin, std::size_t end) {
     auto& mine = blocks[b];
     mine.resize(datums.size());
+    const auto keep = [&](std::size_t k, std::size_t i) {
+      mine[k].points.push_back(scan[i]);
+      if (!normals.empty()) mine[k].normals.push_back(normals[i]);
+    };
     for (std::size_t j = begin; j < end; ++j) {
       const Vec3& p = scan[j * stride];
-      for (std::size_t k = 0; k < datums.size(); ++k)
-        if ((p - centres[k]).squaredNorm() <= r2[k])
-          mine[k].push_back(static_cast<std::uint32_t>(j * stride));
+      if (!grid) {
+        for (std::size_t k = 0; k < datums.size(); ++k)
+          if ((p - centres[k]).squaredNorm() <= r2[k]) keep(k, j * stride);
+        continue;
+      }
+      for (std::uint64_t m = grid->at(p); m != 0; m &= m - 1) {
+        const auto k = static_cast<std::size_t>(std::countr_zero(m));
+        if ((p - centres[k]).squaredNorm() <= r2[k]) keep(k, j * stride);
+      }
     }
   });
   std::vector<FeaturePoints> out(datums.size());
-  for (const auto& block : blocks)
-    for (std::size_t k = 0; k < block.size(); ++k)
-      for (std::uint32_t i : block[k]) {
-        out[k].points.push_back(scan[i]);
-        if (!normals.empty()) out[k].normals.push_back(normals[i]);
-      }
+  for (std::size_t k = 0; k < datums.size(); ++k) {
+    std::size_t n = 0;
+    for (const auto& block : blocks) n += block.empty() ? 0 : block[k].points.size();
+    out[k].points.reserve(n);
+    if (!normals.empty()) out[k].normals.reserve(n);
+    for (const auto& block : blocks) {
+      if (block.empty()) continue;
+      out[k].points.insert(out[k].points.end(), block[k].points.begin(), block[k].points.end());
+      out[k].normals.insert(out[k].normals.end(), block[k].normals.begin(), block[k].normals.end());
+    }
+  }
   return out;
 }
 
 // The datum's points of `candidates` (scan frame) in the CAD frame of `T` within `radius` of
 // its point.
+// The sphere is tested in the scan frame (a rigid motion keeps distances): only the points kept
+// are carried into the CAD frame.
 FeaturePoints near_points(const FeaturePoints& candidates, const Transform& T, const Datum& datum,
                           double radius) {
   FeaturePoints near;
+  const Vec3 centre = T.inverse() * datum.point;
+  const double r2 = radius * radius;
   for (std::size_t i = 0; i < candidates.points.size(); ++i) {
-    const Vec3 q = T * candidates.points[i];
-    if ((q - datum.point).squaredNorm() > radius * radius) continue;
-    near.points.push_back(q);
+    if ((candidates.points[i] - centre).squaredNorm() > r2) continue;
+    near.points.push_back(T * candidates.points[i]);
     if (!candidates.normals.empty()) near.normals.push_back(T.linear() * candidates.normals[i]);
   }
   return near;
@@ -285,26 +358,29 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
   out.T_cad_scan = T_cad_scan_best;
   std::vector<FeatureFit> fits;
   // One round: measure every datum (`capture`: the wide search), solve, move the frame.
+  // The datums are measured side by side (each from its own points, into its own slot).
   const auto round = [&](const std::string& stage, double band) -> bool {
-    fits.clear();
-    std::vector<Constraint> constraints;
-    for (std::size_t k = 0; k < datums.size(); ++k) {
+    fits.assign(datums.size(), FeatureFit{});
+    parallel_tasks(datums.size(), settings.threads, [&](std::size_t k) {
       if (stage == "capture") {
         const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
                                                datum_detail::capture_radius(datums[k], band));
-        fits.push_back(datum_detail::capture_feature(datums[k], near, band, settings));
+        fits[k] = datum_detail::capture_feature(datums[k], near, band, settings);
       } else {
         const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
                                                datum_detail::gather_radius(datums[k], band));
-        fits.push_back(datum_detail::measure_feature(datums[k], near, band, settings));
+        fits[k] = datum_detail::measure_feature(datums[k], near, band, settings);
       }
-      if (!fits.back().measured) {
+    });
+    std::vector<Constraint> constraints;
+    for (std::size_t k = 0; k < datums.size(); ++k) {
+      if (!fits[k].measured) {
         out.failed_datum = datums[k].name;
-        out.failure = not_measurable(datums[k], fits.back());
+        out.failure = not_measurable(datums[k], fits[k]);
         return false;
       }
       for (const Vec3& dir : fixed_directions(datums[k]))
-        constraints.push_back({fits.back().point, datums[k].point, dir, datums[k].weight});
+        constraints.push_back({fits[k].point, datums[k].point, dir, datums[k].weight});
     }
     const Transform step = solve_frame(std::move(constraints), info.origin);
     out.T_cad_scan = step * out.T_cad_scan;
