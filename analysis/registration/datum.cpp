@@ -128,21 +128,29 @@ class SphereGrid {
     cell_ = std::max(kMinCellMm, std::cbrt(size.prod() / kMaxCells));
     for (int a = 0; a < 3; ++a) n_[a] = std::max(1, static_cast<int>(std::ceil(size(a) / cell_)));
     masks_.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2], 0);
-    for (std::size_t k = 0; k < centres.size(); ++k)
-      for (int z = 0; z < n_[2]; ++z)
-        for (int y = 0; y < n_[1]; ++y)
-          for (int x = 0; x < n_[0]; ++x) {
+    // Each sphere marks the cells of its box that it reaches.
+    for (std::size_t k = 0; k < centres.size(); ++k) {
+      int from[3], to[3];
+      for (int a = 0; a < 3; ++a) {
+        from[a] = std::max(0, static_cast<int>((centres[k](a) - radii[k] - lo_(a)) / cell_));
+        to[a] = std::min(n_[a] - 1, static_cast<int>((centres[k](a) + radii[k] - lo_(a)) / cell_));
+      }
+      for (int z = from[2]; z <= to[2]; ++z)
+        for (int y = from[1]; y <= to[1]; ++y)
+          for (int x = from[0]; x <= to[0]; ++x) {
             const Vec3 box_lo = lo_ + cell_ * Vec3(x, y, z);
             const Vec3 nearest =
                 centres[k].cwiseMax(box_lo).cwiseMin(box_lo + Vec3::Constant(cell_));
             if ((nearest - centres[k]).squaredNorm() <= radii[k] * radii[k])
               masks_[index(x, y, z)] |= std::uint64_t{1} << k;
           }
+    }
   }
 
   /// The datums whose sphere reaches the cell of `p` (a bit each), 0 outside the box.
   std::uint64_t at(const Vec3& p) const {
-    if ((p.array() < lo_.array()).any() || (p.array() >= hi_.array()).any()) return 0;
+    // Written so that a non-finite coordinate is outside too.
+    if (!(p.array() >= lo_.array()).all() || !(p.array() < hi_.array()).all()) return 0;
     const Vec3 c = (p - lo_) / cell_;
     return masks_[index(std::min(static_cast<int>(c.x()), n_[0] - 1),
                         std::min(static_cast<int>(c.y()), n_[1] - 1),
