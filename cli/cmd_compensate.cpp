@@ -62,14 +62,28 @@ analysis::Expected<bool> check_same_part(const v1::InspectionReport& report, con
                         sha->substr(0, 16) + "...");
 }
 
+// The translations the scan did not fix (report global_fit.free_directions): the field's
+// component along them is the alignment's, not the part's (field_evaluation.hpp).
+analysis::FieldEvaluationSettings field_settings(const v1::InspectionReport& report) {
+  analysis::FieldEvaluationSettings settings;
+  for (const auto& free : report.global_fit().free_directions()) {
+    const analysis::Vec3 d(free.direction().x(), free.direction().y(), free.direction().z());
+    if (d.norm() > 0.5) settings.free_directions.push_back(d.normalized());
+  }
+  return settings;
+}
+
 // -F x the field at each point (docs/matching.md: the displacement adjustment method).
-analysis::OffsetField offsets(const analysis::DeformationField& field, double factor) {
-  return [&field, factor](const std::vector<analysis::Vec3>& points) {
-    auto at = analysis::evaluate_field(field, points);
+analysis::OffsetField offsets(const analysis::DeformationField& field,
+                              const analysis::FieldEvaluationSettings& settings, double factor) {
+  return [&field, settings, factor](const std::vector<analysis::Vec3>& points) {
+    auto at = analysis::evaluate_field(field, points, settings);
     analysis::PointOffsets out;
     out.offset.reserve(points.size());
     for (const auto& d : at.deformation) out.offset.push_back(-factor * d);
     out.covered = std::move(at.covered);
+    // The field's scatter, scaled like the offsets: the allowance of a plane or cylinder.
+    for (const double u : at.spread_mm) out.uncertainty_mm.push_back(factor * u);
     return out;
   };
 }
@@ -144,7 +158,8 @@ int compensate_main(int argc, char** argv) {
   const std::string die_path = args.has("die") ? args.get("die") : args.get("cad");
   const auto die = analysis::load_cad(die_path);
   if (!die) return fail_with(kName, die.message(), kExitUsage);
-  const auto compensated = analysis::compensated_shape(*die, offsets(*field, *factor), settings);
+  const auto compensated = analysis::compensated_shape(
+      *die, offsets(*field, field_settings(*report), *factor), settings);
   if (!compensated)
     return fail_with(kName, die_path + ": " + compensated.message(),
                      compensated.error().is_invalid_input() ? kExitUsage : kExitAnalysisFailed);

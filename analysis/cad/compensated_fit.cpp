@@ -28,6 +28,10 @@ constexpr int kMaxSpans = 32;  // per direction: 35 x 35 poles at most
 Vec3 v3(const gp_XYZ& p) { return {p.X(), p.Y(), p.Z()}; }
 gp_Pnt pnt(const Vec3& p) { return {p.x(), p.y(), p.z()}; }
 gp_Dir dir(const Vec3& d) { return {d.x(), d.y(), d.z()}; }
+// A sample's weight in a plane or cylinder fit: 1 / allowance^2 (the field's certainty there).
+double weight(const FaceSample& s) {
+  return 1.0 / std::max(s.allowance_mm * s.allowance_mm, 1e-12);
+}
 
 // A clamped uniform cubic knot vector over [a, b] with `spans` spans.
 struct Knots {
@@ -116,39 +120,33 @@ Handle(Geom_BSplineSurface) bspline_surface(const TopoDS_Face&, const std::vecto
   return new Geom_BSplineSurface(array, uk, vk, um, vm, kDegree, kDegree);
 }
 
-// The plane through the samples (least squares), when every sample lies within `tolerance`.
-bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s, double tolerance,
-               FaceFit& fit) {
+// The plane through the samples, weighted by 1 / allowance^2 (least squares), when every sample
+// lies within its allowance.
+bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s, double share, FaceFit& fit) {
   Vec3 mean = Vec3::Zero();
-  for (const auto& p : s) mean += p.moved;
-  mean /= static_cast<double>(s.size());
+  double weight_sum = 0.0;
+  for (const auto& p : s) {
+    mean += weight(p) * p.moved;
+    weight_sum += weight(p);
+  }
+  mean /= weight_sum;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  for (const auto& p : s) covariance += (p.moved - mean) * (p.moved - mean).transpose();
+  for (const auto& p : s) covariance += weight(p) * (p.moved - mean) * (p.moved - mean).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-  Vec3 normal = eigen.eigenvectors().col(0);
-  // The surface normal Pu x Pv keeps its side, so the face keeps its orientation.
-  const Vec3 old_normal = v3(old.XDirection().XYZ()).cross(v3(old.YDirection().XYZ()));
-  if (normal.dot(old_normal) < 0.0) normal = -normal;
-  double worst = 0.0;
-  for (const auto& p : s) worst = std::max(worst, std::abs(normal.dot(p.moved - mean)));
-  fit.canonical_deviation_mm = worst;
-  if (!(worst <= tolerance)) return false;
-  Vec3 x = v3(old.XDirection().XYZ());
-  x = (x - x.dot(normal) * normal).normalized();
-  fit.kind = "plane";
-  fit.origin = mean;
-  fit.z = normal;
-  fit.x = x;
-  fit.y = normal.cross(x);
-  fit.max_deviation_mm = worst;
-  fit.surface = new Geom_Plane(gp_Ax3(pnt(mean), dir(normal), dir(x)));
+  const Vec3 normal = eigen.eigenvectors().col(0);
+  std::vector<double> residual;
+  for (const auto& p : s) residual.push_back(std::abs(normal.dot(p.moved - mean)));
+  fit.canonical_deviation_mm = *std::max_element(residual.begin(), residual.end());
+  if (!within_allowance(s, residual, share)) return false;
+  const double deviation = fit.canonical_deviation_mm;
+  fit = plane_surface(old, mean, normal);
+  fit.canonical_deviation_mm = fit.max_deviation_mm = deviation;
   return true;
 }
 
 // The cylinder through the samples: the axis along the moved grid columns (constant u), the
 // circle by Kasa's algebraic fit across it; accepted when every sample lies within `tolerance`.
-bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double tolerance,
-                  FaceFit& fit) {
+bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double share, FaceFit& fit) {
   std::vector<std::pair<int, const FaceSample*>> low, high;  // per column: lowest/highest row
   int columns = 0;
   for (const auto& p : s) columns = std::max(columns, p.column + 1);
@@ -171,9 +169,9 @@ bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double to
   Eigen::MatrixXd a(static_cast<Eigen::Index>(s.size()), 3);
   Eigen::VectorXd b(static_cast<Eigen::Index>(s.size()));
   for (std::size_t i = 0; i < s.size(); ++i) {
-    const double x = s[i].moved.dot(e1), y = s[i].moved.dot(e2);
-    a.row(static_cast<Eigen::Index>(i)) << x, y, 1.0;
-    b[static_cast<Eigen::Index>(i)] = -(x * x + y * y);
+    const double x = s[i].moved.dot(e1), y = s[i].moved.dot(e2), w = std::sqrt(weight(s[i]));
+    a.row(static_cast<Eigen::Index>(i)) << w * x, w * y, w;
+    b[static_cast<Eigen::Index>(i)] = -w * (x * x + y * y);
   }
   const Eigen::Vector3d c = a.colPivHouseholderQr().solve(b);
   const double cx = -c[0] / 2.0, cy = -c[1] / 2.0, r2 = cx * cx + cy * cy - c[2];
@@ -181,14 +179,16 @@ bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double to
   const double radius = std::sqrt(r2);
   const Vec3 center = cx * e1 + cy * e2;
   double worst = 0.0;
+  std::vector<double> residual;
   Vec3 mid = Vec3::Zero();
   for (const auto& p : s) {
     const Vec3 w = p.moved - center;
-    worst = std::max(worst, std::abs((w - w.dot(axis) * axis).norm() - radius));
+    residual.push_back(std::abs((w - w.dot(axis) * axis).norm() - radius));
+    worst = std::max(worst, residual.back());
     mid += p.moved;
   }
   fit.canonical_deviation_mm = worst;
-  if (!(worst <= tolerance)) return false;
+  if (!within_allowance(s, residual, share)) return false;
   mid /= static_cast<double>(s.size());
   Vec3 x = mid - center;
   x = (x - x.dot(axis) * axis).normalized();  // u = 0 mid-face: a bend never wraps
@@ -207,6 +207,31 @@ bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double to
 
 }  // namespace
 
+bool within_allowance(const std::vector<FaceSample>& samples, const std::vector<double>& residual,
+                      double share) {
+  std::size_t within = 0;
+  for (std::size_t i = 0; i < samples.size(); ++i)
+    within += residual[i] <= samples[i].allowance_mm ? 1 : 0;
+  return static_cast<double>(within) >= share * static_cast<double>(samples.size());
+}
+
+FaceFit plane_surface(const gp_Ax3& old, const Vec3& point, Vec3 normal) {
+  // The surface normal Pu x Pv keeps its side, so the face keeps its orientation.
+  const Vec3 old_normal = v3(old.XDirection().XYZ()).cross(v3(old.YDirection().XYZ()));
+  if (normal.dot(old_normal) < 0.0) normal = -normal;
+  Vec3 x = v3(old.XDirection().XYZ());
+  x = (x - x.dot(normal) * normal).normalized();
+  FaceFit fit;
+  fit.kind = "plane";
+  fit.same_parameters = false;
+  fit.origin = point;
+  fit.z = normal;
+  fit.x = x;
+  fit.y = normal.cross(x);
+  fit.surface = new Geom_Plane(gp_Ax3(pnt(point), dir(normal), dir(x)));
+  return fit;
+}
+
 Eigen::Vector2d FaceFit::uv_of(const Vec3& moved) const {
   const Vec3 w = moved - origin;
   if (kind == "plane") return {w.dot(x), w.dot(y)};
@@ -219,12 +244,12 @@ FaceFit fit_face(const TopoDS_Face& face, const std::vector<FaceSample>& samples
   FaceFit fit;
   const GeomAdaptor_Surface old(BRep_Tool::Surface(face));
   if (may_be_canonical && old.GetType() == GeomAbs_Plane &&
-      fit_plane(old.Plane().Position(), samples, settings.canonical_tolerance_mm, fit)) {
+      fit_plane(old.Plane().Position(), samples, settings.canonical_share, fit)) {
     fit.same_parameters = false;
     return fit;
   }
   if (may_be_canonical && old.GetType() == GeomAbs_Cylinder &&
-      fit_cylinder(old.Cylinder().Position(), samples, settings.canonical_tolerance_mm, fit)) {
+      fit_cylinder(old.Cylinder().Position(), samples, settings.canonical_share, fit)) {
     fit.same_parameters = false;
     return fit;
   }

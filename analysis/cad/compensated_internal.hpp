@@ -20,6 +20,9 @@ struct FaceSample {
   /// The grid row and column of an inside sample (-1 for a boundary sample): the cylinder fit
   /// reads the axis from the grid's columns.
   int row = -1, column = -1;
+  /// How far the sample may lie from a plane or cylinder that replaces the face (mm):
+  /// canonical_tolerance_mm + uncertainty_factor x the field's uncertainty there.
+  double allowance_mm = 0.0;
 };
 
 /// The refit of one face: the new surface and how its trimming curves follow.
@@ -44,6 +47,25 @@ struct FaceFit {
 FaceFit fit_face(const TopoDS_Face& face, const std::vector<FaceSample>& samples,
                  const Eigen::Vector4d& uv_box, bool may_be_canonical,
                  const CompensatedShapeSettings& settings);
+
+/// A plane through `point` with `normal` (flipped to the side of `old`'s Pu x Pv, so the face
+/// keeps its orientation), its x axis along old's: the FaceFit of a face that stays a plane.
+FaceFit plane_surface(const gp_Ax3& old, const Vec3& point, Vec3 normal);
+
+/// The planar faces of one flange moved together: one normal for all, one plane per side of
+/// the sheet (faces whose old planes coincide). Samples are weighted by 1 / allowance^2, so the
+/// well-measured interior decides over a blurred bend line. fits[i] is faces[i]'s plane; false
+/// (fits untouched) when a face is not a plane or fewer than `share` of the samples lie within
+/// their allowance (within_allowance): a real form defect, the faces are then refitted one by
+/// one. `worst` is the largest distance.
+bool fit_flange(const std::vector<TopoDS_Face>& faces,
+                const std::vector<const std::vector<FaceSample>*>& samples, double share,
+                std::vector<FaceFit>& fits, double& worst);
+
+/// At least `share` of the samples lie within their allowance (residual[i]: sample i's distance
+/// from the plane or cylinder).
+bool within_allowance(const std::vector<FaceSample>& samples, const std::vector<double>& residual,
+                      double share);
 
 /// A B-spline curve through `points` at `parameters` (ascending); its largest distance from
 /// them in `max_deviation_mm`.

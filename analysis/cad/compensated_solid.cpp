@@ -16,6 +16,7 @@
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 #include "analysis/cad/compensated_internal.hpp"
@@ -57,6 +58,7 @@ struct Sampling {
   std::vector<FaceData> face;
   std::vector<Vec3> offset;  // per point, after filling the uncovered ones
   std::vector<bool> covered;
+  std::vector<double> uncertainty;  // the field's, per point (mm)
   int add(const gp_Pnt& p) {
     points.emplace_back(p.X(), p.Y(), p.Z());
     return static_cast<int>(points.size()) - 1;
@@ -110,7 +112,9 @@ void sample_face(const TopoDS_Face& face, FaceData& d, Sampling& s,
 // The field at every sample; an uncovered sample takes its nearest covered sample's offset.
 Expected<bool> ask_field(Sampling& s, const OffsetField& field) {
   PointOffsets answer = field(s.points);
-  if (answer.offset.size() != s.points.size() || answer.covered.size() != s.points.size())
+  if (answer.uncertainty_mm.empty()) answer.uncertainty_mm.assign(s.points.size(), 0.0);
+  if (answer.offset.size() != s.points.size() || answer.covered.size() != s.points.size() ||
+      answer.uncertainty_mm.size() != s.points.size())
     return fail(ErrorCode::kInternal, "compensated shape: the field answered " +
                                           std::to_string(answer.offset.size()) + " offsets for " +
                                           std::to_string(s.points.size()) + " points");
@@ -118,7 +122,7 @@ Expected<bool> ask_field(Sampling& s, const OffsetField& field) {
   std::vector<std::size_t> anchor_index;
   for (std::size_t i = 0; i < s.points.size(); ++i) {
     if (!answer.covered[i]) continue;
-    if (!answer.offset[i].allFinite())
+    if (!answer.offset[i].allFinite() || !std::isfinite(answer.uncertainty_mm[i]))
       return fail("compensated shape: the field is not finite at a sample");
     anchors.push_back(s.points[i]);
     anchor_index.push_back(i);
@@ -129,7 +133,9 @@ Expected<bool> ask_field(Sampling& s, const OffsetField& field) {
     if (answer.covered[i]) continue;
     const auto nearest = tree.nearest(s.points[i]);
     answer.offset[i] = answer.offset[anchor_index[nearest->index]];
+    answer.uncertainty_mm[i] = answer.uncertainty_mm[anchor_index[nearest->index]];
   }
+  s.uncertainty = std::move(answer.uncertainty_mm);
   s.offset = std::move(answer.offset);
   s.covered = std::move(answer.covered);
   return true;
@@ -142,8 +148,15 @@ std::string describe(const CadFaceInfo& f) {
   return text;
 }
 
+// How far a moved sample may lie from a plane or cylinder (compensated_solid.hpp).
+double allowance(const Sampling& s, int point, const CompensatedShapeSettings& settings) {
+  return settings.canonical_tolerance_mm +
+         settings.uncertainty_factor * s.uncertainty[static_cast<std::size_t>(point)];
+}
+
 // The face's boundary samples: every edge's moved samples at the edge's pcurve on the face.
-void add_boundary(const TopoDS_Face& face, FaceData& d, const Sampling& s) {
+void add_boundary(const TopoDS_Face& face, FaceData& d, const Sampling& s,
+                  const CompensatedShapeSettings& settings) {
   for (TopExp_Explorer x(face, TopAbs_EDGE); x.More(); x.Next()) {
     const TopoDS_Edge& e = TopoDS::Edge(x.Current());
     const EdgeData& edge = s.edge[static_cast<std::size_t>(s.edges.FindIndex(e) - 1)];
@@ -159,6 +172,7 @@ void add_boundary(const TopoDS_Face& face, FaceData& d, const Sampling& s) {
       FaceSample sample;
       sample.uv = {uv.X(), uv.Y()};
       sample.moved = edge.points[k];
+      sample.allowance_mm = allowance(s, edge.index[k], settings);
       d.samples.push_back(sample);
     }
   }
@@ -264,15 +278,15 @@ double percentile_95(std::vector<double> values) {
   return values[k];
 }
 
-// One face: its coverage checked, its samples moved and refitted.
-Expected<bool> refit_face(const TopoDS_Face& face, const CadFaceInfo& info, const Sampling& s,
-                          const CompensatedShapeSettings& settings, FaceData& d,
-                          std::vector<double>& deviations) {
+// One face: its coverage checked, its samples moved (with their allowances) and its boundary added.
+Expected<bool> prepare_face(const TopoDS_Face& face, const CadFaceInfo& info, const Sampling& s,
+                            const CompensatedShapeSettings& settings, FaceData& d) {
   d.report.id = info.id;
   std::size_t covered = 0;
   for (std::size_t k = 0; k < d.index.size(); ++k) {
     const auto i = static_cast<std::size_t>(d.index[k]);
     d.samples[k].moved = s.points[i] + s.offset[i];
+    d.samples[k].allowance_mm = allowance(s, d.index[k], settings);
     covered += s.covered[i] ? 1 : 0;
     d.report.max_offset_mm = std::max(d.report.max_offset_mm, s.offset[i].norm());
   }
@@ -282,15 +296,49 @@ Expected<bool> refit_face(const TopoDS_Face& face, const CadFaceInfo& info, cons
     return fail("compensated shape: the deformation field does not cover " + describe(info) + ": " +
                 std::to_string(covered) + " of its " + std::to_string(d.index.size()) +
                 " samples have a deformation vector nearby");
-  add_boundary(face, d, s);
+  add_boundary(face, d, s, settings);
   if (d.samples.empty())
     return fail(ErrorCode::kInternal,
                 "compensated shape: face " + std::to_string(info.id) + " has no samples");
-  d.fit = compensated::fit_face(face, d.samples, d.box, !d.seam, settings);
+  return true;
+}
+
+// The planar faces of each flange of the segmentation fitted as one (fit_flange); a flange
+// with a real form defect is left to the faces' own fits.
+void fit_flanges(const CadShape& shape, Sampling& s, const CompensatedShapeSettings& settings) {
+  const CadShape::Impl& impl = shape.impl();
+  for (const Flange& flange : segment_cad(shape).flanges) {
+    std::vector<TopoDS_Face> faces;
+    std::vector<const std::vector<FaceSample>*> samples;
+    bool seam = false;
+    for (const int id : flange.face_ids) {
+      faces.push_back(impl.face(id));
+      samples.push_back(&s.face[static_cast<std::size_t>(id)].samples);
+      seam = seam || s.face[static_cast<std::size_t>(id)].seam;
+    }
+    std::vector<FaceFit> fits;
+    double worst = 0.0;
+    if (seam || !compensated::fit_flange(faces, samples, settings.canonical_share, fits, worst))
+      continue;
+    for (std::size_t f = 0; f < faces.size(); ++f) {
+      FaceData& d = s.face[static_cast<std::size_t>(flange.face_ids[f])];
+      d.fit = fits[f];
+      d.report.flange = flange.id;
+    }
+  }
+}
+
+// A face's refit (unless its flange's fit holds it) and its distances from the moved samples.
+Expected<bool> finish_face(const TopoDS_Face& face, const CadFaceInfo& info,
+                           const CompensatedShapeSettings& settings, FaceData& d,
+                           std::vector<double>& deviations) {
+  if (d.report.flange < 0) d.fit = compensated::fit_face(face, d.samples, d.box, !d.seam, settings);
   d.report.surface = d.fit.kind;
   d.report.canonical_deviation_mm = d.fit.canonical_deviation_mm;
   face_deviations(d, deviations);
-  if (d.report.max_deviation_mm > settings.max_fit_deviation_mm)
+  // A plane or cylinder lies within each sample's allowance by construction (fit_plane): only
+  // a B-spline that cannot follow its samples fails here.
+  if (d.fit.same_parameters && d.report.max_deviation_mm > settings.max_fit_deviation_mm)
     return fail(ErrorCode::kAnalysisFailed,
                 "compensated shape: the refit of " + describe(info) + " lies " +
                     std::to_string(d.report.max_deviation_mm) +
@@ -314,6 +362,7 @@ Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& 
   if (auto asked = ask_field(s, field); !asked) return asked.error();
   auto moved = [&](int i) { return Vec3(s.points[i] + s.offset[i]); };
   for (const Vec3& o : s.offset) out.max_offset_mm = std::max(out.max_offset_mm, o.norm());
+  for (const double u : s.uncertainty) out.max_uncertainty_mm = std::max(out.max_uncertainty_mm, u);
   for (EdgeData& e : s.edge) {
     if (!e.moved) continue;
     for (const int i : e.index) e.points.push_back(moved(i));
@@ -323,10 +372,16 @@ Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& 
       deviations.push_back((v3(e.curve->Value(e.t[k]).XYZ()) - e.points[k]).norm());
   }
   const std::vector<CadFaceInfo> info = describe_faces(shape);
+  for (int f = 0; f < impl.faces.Extent(); ++f)
+    if (auto done = prepare_face(impl.face(f), info[static_cast<std::size_t>(f)], s, settings,
+                                 s.face[static_cast<std::size_t>(f)]);
+        !done)
+      return done.error();
+  fit_flanges(shape, s, settings);
   for (int f = 0; f < impl.faces.Extent(); ++f) {
     FaceData& d = s.face[static_cast<std::size_t>(f)];
     if (auto done =
-            refit_face(impl.face(f), info[static_cast<std::size_t>(f)], s, settings, d, deviations);
+            finish_face(impl.face(f), info[static_cast<std::size_t>(f)], settings, d, deviations);
         !done)
       return done.error();
     out.max_deviation_mm = std::max(out.max_deviation_mm, d.report.max_deviation_mm);

@@ -5,9 +5,14 @@
 // topology, so the result is the same solid or shell with the same faces, written as STEP.
 //
 // Each face is sampled on a grid over its (u, v) range and the moved grid is refitted:
-//  - a plane that stays a plane (a circular cylinder that stays one) within
-//    canonical_tolerance_mm is written as that plane (cylinder): a rigidly moved flange, an
-//    over-bent bend; the segmentation then finds the same flanges and bends on re-import;
+//  - the planar faces of one flange of the segmentation are fitted together: one normal, one
+//    plane per side of the sheet, so a rigidly moved flange stays one flange;
+//  - a plane that stays a plane (a circular cylinder that stays one) is written as that plane
+//    (cylinder): a rigidly moved flange, an over-bent bend; the segmentation then finds the same
+//    flanges and bends on re-import. "Stays" is judged per sample against the field's own
+//    uncertainty there: canonical_tolerance_mm + uncertainty_factor x the field's scatter, so
+//    a sparser, noisier field keeps the flanges planes, while a form defect the field measures
+//    well (smoothly, larger than that) still makes a B-spline;
 //  - any other face becomes a cubic B-spline surface fitted by least squares in the face's own
 //    (u, v) parametrisation, so its trimming curves stay as they are.
 // Edges get B-spline curves through their moved samples at their own parameters, vertices move
@@ -33,6 +38,9 @@ namespace springscan::analysis {
 struct PointOffsets {
   std::vector<Vec3> offset;
   std::vector<bool> covered;
+  /// How well offset[i] is known (mm, the field's local scatter, FieldAtPoints::spread_mm);
+  /// empty: exactly.
+  std::vector<double> uncertainty_mm;
 };
 using OffsetField = std::function<PointOffsets(const std::vector<Vec3>& points)>;
 
@@ -43,6 +51,12 @@ struct CompensatedShapeSettings {
   double bspline_tolerance_mm = 0.01;   ///< the B-spline refit's aim (max over its samples)
   int edge_samples = 41;                ///< samples along each edge
   double canonical_tolerance_mm = 0.1;  ///< a moved plane/cylinder within this stays one
+  /// ... plus this many times the field's uncertainty at each sample (PointOffsets).
+  double uncertainty_factor = 3.0;
+  /// The share of a face's (a flange's) samples that must lie within that allowance. Not all:
+  /// where the field extrapolates (a corner the scan barely reaches) a few samples stray by
+  /// more than its scatter says; a real form defect covers a region, not a few samples.
+  double canonical_share = 0.95;
   /// A face with fewer of its samples covered by the field is refused (the error names it);
   /// its other uncovered samples take the offset of the nearest covered sample.
   double min_face_coverage = 0.5;
@@ -59,6 +73,7 @@ struct CompensatedFace {
   /// A plane or cylinder: how far the moved samples lie from the best one (-1: not tried, e.g.
   /// a B-spline face); above canonical_tolerance_mm the face became a B-spline.
   double canonical_deviation_mm = -1.0;
+  int flange = -1;  ///< the flange of the segmentation fitted as one (-1: fitted alone)
 };
 
 struct CompensatedShape {
@@ -66,8 +81,9 @@ struct CompensatedShape {
   std::vector<CompensatedFace> faces;
   double max_deviation_mm = 0.0;  ///< refit vs moved samples, over faces and edges
   double p95_deviation_mm = 0.0;
-  double max_offset_mm = 0.0;  ///< longest displacement applied
-  bool valid = false;          ///< BRepCheck_Analyzer found the shape valid
+  double max_offset_mm = 0.0;       ///< longest displacement applied
+  double max_uncertainty_mm = 0.0;  ///< largest field uncertainty at a sample
+  bool valid = false;               ///< BRepCheck_Analyzer found the shape valid
 };
 
 /// Moves `shape` by `offsets`. Errors: an empty shape, a face the field does not cover

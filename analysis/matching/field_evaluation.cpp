@@ -14,6 +14,23 @@ namespace {
 // span (a turning flange), large enough to keep the 4x4 system regular on a flat patch.
 constexpr double kRidge = 1e-3;
 
+// The weighted rms of the vectors about the fitted d_i = a + B (p_i - x) (the same weights).
+double spread(const DeformationField& field, const std::vector<Vec3>& anchors,
+              const std::vector<Neighbor>& near, const Vec3& x, double sigma,
+              const Eigen::Matrix<double, 4, 3>& solution) {
+  if (!(sigma > 0.0)) return 0.0;
+  double sum = 0.0, weight_sum = 0.0;
+  for (const Neighbor& n : near) {
+    const double w = std::exp(-n.squared_distance / (2.0 * sigma * sigma));
+    Eigen::Vector4d row;
+    row << 1.0, Vec3((anchors[n.index] - x) / sigma);
+    const Vec3 fitted = solution.transpose() * row;
+    sum += w * (field.vectors[n.index].displacement() - fitted).squaredNorm();
+    weight_sum += w;
+  }
+  return weight_sum > 0.0 ? std::sqrt(sum / weight_sum) : 0.0;
+}
+
 }  // namespace
 
 FieldAtPoints evaluate_field(const DeformationField& field, const std::vector<Vec3>& points,
@@ -22,6 +39,7 @@ FieldAtPoints evaluate_field(const DeformationField& field, const std::vector<Ve
   out.deformation.assign(points.size(), Vec3::Zero());
   out.covered.assign(points.size(), false);
   out.support.assign(points.size(), 0);
+  out.spread_mm.assign(points.size(), 0.0);
   if (field.vectors.empty()) return out;
   std::vector<Vec3> anchors;
   anchors.reserve(field.vectors.size());
@@ -56,8 +74,11 @@ FieldAtPoints evaluate_field(const DeformationField& field, const std::vector<Ve
     normal.bottomRightCorner<3, 3>() += kRidge * weight_sum * Eigen::Matrix3d::Identity();
     const Eigen::Matrix<double, 4, 3> solution = normal.ldlt().solve(rhs);
     out.deformation[k] = solution.row(0).transpose();
+    for (const Vec3& free : settings.free_directions)
+      out.deformation[k] -= out.deformation[k].dot(free) * free;
     out.covered[k] = true;
     out.support[k] = static_cast<int>(near.size());
+    out.spread_mm[k] = spread(field, anchors, near, x, sigma, solution);
   }
   return out;
 }

@@ -102,6 +102,56 @@ TEST(CompensatedShape, SmoothFieldGivesValidBSplineSolid) {
   EXPECT_NEAR(out->max_offset_mm, 0.3, 0.12);
 }
 
+// A flange moved rigidly, measured with noise (0.15 mm, more than canonical_tolerance_mm) the
+// field knows about (its uncertainty): its faces stay planes, one normal per flange, and the
+// die re-segments with every flange and bend. The same noise unannounced makes B-splines; a
+// curl the field measures well (0.4 mm) is kept as a B-spline.
+TEST(CompensatedShape, NoisyRigidFlangesStayPlanesARealCurlDoesNot) {
+  const auto cad = make_profile_shape(thick(hat_profile(20, 30, 40, 80, 3)));
+  ASSERT_TRUE(cad) << cad.message();
+  const Transform T = small_motion();
+  auto noisy = [T](double uncertainty_mm) {
+    return [T, uncertainty_mm](const std::vector<Vec3>& points) {
+      PointOffsets out;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const double noise = 0.15 * std::sin(37.0 * static_cast<double>(i));  // deterministic
+        out.offset.push_back(T * points[i] - points[i] + Vec3(0.0, 0.0, noise));
+      }
+      out.covered.assign(points.size(), true);
+      out.uncertainty_mm.assign(points.size(), uncertainty_mm);
+      return out;
+    };
+  };
+  const auto kept = compensated_shape(*cad, noisy(0.05));
+  ASSERT_TRUE(kept) << kept.message();
+  const PartSegmentation before = segment_cad(*cad), after = segment_cad(kept->shape);
+  for (const Flange& flange : before.flanges)
+    for (const int id : flange.face_ids) {
+      EXPECT_EQ(kept->faces[static_cast<std::size_t>(id)].surface, "plane") << "face " << id;
+      EXPECT_EQ(kept->faces[static_cast<std::size_t>(id)].flange, flange.id) << "face " << id;
+    }
+  EXPECT_EQ(after.flanges.size(), before.flanges.size());
+  EXPECT_EQ(after.bends.size(), before.bends.size());
+  const auto unannounced = compensated_shape(*cad, noisy(0.0));
+  ASSERT_TRUE(unannounced) << unannounced.message();
+  int bsplines = 0;
+  for (const auto& f : unannounced->faces) bsplines += f.surface == "bspline" ? 1 : 0;
+  EXPECT_GT(bsplines, 0);
+  // A curl of 0.4 mm along x across the whole part, known to 0.02 mm.
+  const OffsetField curl = [](const std::vector<Vec3>& points) {
+    PointOffsets out;
+    for (const Vec3& p : points) out.offset.push_back(Vec3(0.0, 0.0, 0.4 * std::sin(p.x() / 15.0)));
+    out.covered.assign(points.size(), true);
+    out.uncertainty_mm.assign(points.size(), 0.02);
+    return out;
+  };
+  const auto curled = compensated_shape(*cad, curl);
+  ASSERT_TRUE(curled) << curled.message();
+  for (const Flange& flange : before.flanges)
+    for (const int id : flange.face_ids)
+      EXPECT_EQ(curled->faces[static_cast<std::size_t>(id)].surface, "bspline") << "face " << id;
+}
+
 TEST(CompensatedShape, FaceTheFieldDoesNotCoverIsNamed) {
   const auto cad = make_profile_shape(thick(l_profile(50, 40, 90, 4)));
   ASSERT_TRUE(cad) << cad.message();
@@ -127,7 +177,8 @@ TEST(CompensatedShape, EmptyInputsAreRefused) {
   EXPECT_FALSE(compensated_shape(*cad, OffsetField{}));
   const OffsetField none = [](const std::vector<Vec3>& points) {
     return PointOffsets{std::vector<Vec3>(points.size(), Vec3::Zero()),
-                        std::vector<bool>(points.size(), false)};
+                        std::vector<bool>(points.size(), false),
+                        {}};
   };
   EXPECT_FALSE(compensated_shape(*cad, none));
 }

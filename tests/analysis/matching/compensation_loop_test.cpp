@@ -87,10 +87,14 @@ parts::CadPart compensate(const parts::CadPart& die, const v1::InspectionReport&
   EXPECT_TRUE(field) << field.message();
   const OffsetField offsets = [&](const std::vector<Vec3>& points) {
     FieldEvaluationSettings fs;
+    for (const auto& free : report.global_fit().free_directions())
+      fs.free_directions.push_back(
+          Vec3(free.direction().x(), free.direction().y(), free.direction().z()).normalized());
     auto at = evaluate_field(*field, points, fs);
     PointOffsets out;
     for (const Vec3& d : at.deformation) out.offset.push_back(-d);
     out.covered = at.covered;
+    out.uncertainty_mm = at.spread_mm;
     return out;
   };
   auto moved = compensated_shape(die.shape, offsets);
@@ -100,8 +104,11 @@ parts::CadPart compensate(const parts::CadPart& die, const v1::InspectionReport&
     if (f.surface == "bspline" && f.canonical_deviation_mm >= 0.0)
       std::printf("[ compensate ] face %d: B-spline, %.4f mm from a plane/cylinder\n", f.id,
                   f.canonical_deviation_mm);
-  std::printf("[ compensate ] refit deviation max %.4f mm, p95 %.4f mm, largest move %.3f mm\n",
-              moved->max_deviation_mm, moved->p95_deviation_mm, moved->max_offset_mm);
+  std::printf(
+      "[ compensate ] refit deviation max %.4f mm, p95 %.4f mm, largest move %.3f mm, field "
+      "uncertainty up to %.4f mm\n",
+      moved->max_deviation_mm, moved->p95_deviation_mm, moved->max_offset_mm,
+      moved->max_uncertainty_mm);
   EXPECT_TRUE(write_step_atomically(moved->shape, path));
   auto loaded = parts::load_cad_part(path);
   EXPECT_TRUE(loaded) << loaded.message();
@@ -112,6 +119,11 @@ struct LoopCase {
   std::string name;
   const parts::ProfileSpec* spec;  // null: a part of the shared CAD folder
   std::vector<double> springback_deg;
+  std::int64_t points = 120'000;  ///< scan points per measurement
+  double max_error_mm = 0.0;      ///< bound on the max form error after each round (0: none)
+  /// Under the sanitizers: one round at 40 000 points (a few seconds, not minutes); false: the
+  /// case is left to the Release build (its bounds need its density).
+  bool under_sanitizer = false;
 };
 
 void PrintTo(const LoopCase& c, std::ostream* os) { *os << c.name; }
@@ -120,23 +132,26 @@ class CompensationLoop : public ::testing::TestWithParam<LoopCase> {};
 
 TEST_P(CompensationLoop, ClosesWithinTwentyPercentThenFiftyMicrons) {
   const LoopCase& c = GetParam();
-  // Not under the sanitizers (a round takes a minute there at the scan density the bounds need;
-  // compensated_solid_test runs the same code under them).
-  if (testing::kUnderSanitizer) GTEST_SKIP() << "release builds only";
+  // Under the sanitizers a round at 120 000 points takes a minute: the sparse case runs one
+  // round there (the same code; the bound after one round is the 20 %).
+  if (testing::kUnderSanitizer && !c.under_sanitizer) GTEST_SKIP() << "release builds only";
   const TempDir dir;
   const parts::CadPart& nominal = field_part(c.name, c.spec);
   ASSERT_FALSE(nominal.model.segmentation.bends.empty());
   std::vector<double> springback(nominal.model.segmentation.bends.size(), c.springback_deg.back());
   for (std::size_t b = 0; b < springback.size() && b < c.springback_deg.size(); ++b)
     springback[b] = c.springback_deg[b];
-  const std::int64_t points = 120'000;
-  const int rounds = 3;
+  const std::int64_t points = testing::kUnderSanitizer ? 40'000 : c.points;
+  const int rounds = testing::kUnderSanitizer ? 1 : 3;
   parts::CadPart die = nominal;
   std::vector<double> errors;
   for (int round = 0; round <= rounds; ++round) {
     const Measured m = produce_and_measure(nominal, die, springback, points);
     ASSERT_TRUE(m.report.has_deformation_field());
     errors.push_back(m.form_error_p95);
+    if (round > 0 && c.max_error_mm > 0.0) {
+      EXPECT_LE(m.form_error_max, c.max_error_mm);
+    }
     std::printf(
         "[ loop ] %s round %d: form error p95 %.4f mm (max %.4f), measured |dev| p95 "
         "%.4f mm\n",
@@ -148,7 +163,9 @@ TEST_P(CompensationLoop, ClosesWithinTwentyPercentThenFiftyMicrons) {
     ASSERT_EQ(die.model.segmentation.bends.size(), nominal.model.segmentation.bends.size());
   }
   EXPECT_LE(errors[1], 0.2 * errors[0]);
-  EXPECT_LE(errors[3], 0.05);
+  if (rounds == 3) {
+    EXPECT_LE(errors[3], 0.05);
+  }
 }
 
 const parts::ProfileSpec& hat_solid() {
@@ -161,14 +178,24 @@ const parts::ProfileSpec& hat_solid() {
   return spec;
 }
 
+std::string case_name(std::size_t index) {
+  const char* names[] = {"HatProfile", "MotorBracket", "HatProfileSparseScan"};
+  return names[index];
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Parts, CompensationLoop,
-    ::testing::Values(
-        LoopCase{"hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}},
-        LoopCase{"openamr-MMP.03.00.00.003_Motor_bracket.step", nullptr, {1.5, 1.0, 2.0, 0.8}}),
-    [](const ::testing::TestParamInfo<LoopCase>& param) {
-      return param.index == 0 ? std::string("HatProfile") : std::string("MotorBracket");
-    });
+    ::testing::Values(LoopCase{"hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}, 120'000, 0.2},
+                      LoopCase{"openamr-MMP.03.00.00.003_Motor_bracket.step",
+                               nullptr,
+                               {1.5, 1.0, 2.0, 0.8},
+                               120'000,
+                               0.15},
+                      // A third of the points: the field twice as noisy; its flanges must stay
+                      // planes (docs/matching.md "Why planes and cylinders stay canonical").
+                      LoopCase{
+                          "hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}, 40'000, 0.2, true}),
+    [](const ::testing::TestParamInfo<LoopCase>& param) { return case_name(param.index); });
 
 }  // namespace
 }  // namespace springscan::analysis

@@ -46,6 +46,27 @@ TEST(FieldEvaluation, ReproducesALinearFieldAtTheFreeEdge) {
   EXPECT_GT((gaussian->vectors[0].deformation - (R * points[1] - points[1])).norm(), 0.03);
 }
 
+// The spread is the field's scatter about the local fit: 0 for a linear field, the noise's
+// sigma for a noisy one; a free direction's component is dropped.
+TEST(FieldEvaluation, SpreadIsTheNoiseAndFreeDirectionsAreDropped) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(2.0 * EIGEN_PI / 180.0, Vec3::UnitY()).matrix();
+  DeformationField field = turning_flange(R);
+  const std::vector<Vec3> points{{51.0, 13.0, 0.0}, {30.0, 20.0, 0.0}};
+  for (const double s : evaluate_field(field, points).spread_mm) EXPECT_LT(s, 1e-3);
+  // +-0.05 mm along z in a checkerboard: sigma 0.05 mm, mean 0.
+  for (std::size_t i = 0; i < field.vectors.size(); ++i)
+    field.vectors[i].scan.z() += (i % 2 == 0 ? 0.05 : -0.05);
+  for (const double s : evaluate_field(field, points).spread_mm) EXPECT_NEAR(s, 0.05, 0.01);
+  FieldEvaluationSettings free;
+  free.free_directions = {Vec3::UnitX()};
+  const auto at = evaluate_field(turning_flange(R), points, free);
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    const Vec3 truth = R * points[k] - points[k];
+    EXPECT_NEAR(at.deformation[k].x(), 0.0, 1e-12);
+    EXPECT_NEAR(at.deformation[k].z(), truth.z(), 1e-6);
+  }
+}
+
 TEST(FieldEvaluation, FarPointsAndEmptyFieldsAreNotCovered) {
   const DeformationField field = turning_flange(Eigen::Matrix3d::Identity());
   const auto at = evaluate_field(field, {Vec3(200.0, 0.0, 0.0), Vec3(50.0, 20.0, 0.0)});
