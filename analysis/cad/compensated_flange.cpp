@@ -45,8 +45,8 @@ std::size_t side_of(const gp_Ax3& plane, std::vector<Side>& sides) {
 }  // namespace
 
 bool fit_flange(const std::vector<TopoDS_Face>& faces,
-                const std::vector<const std::vector<FaceSample>*>& samples,
-                double share, std::vector<FaceFit>& fits, double& worst) {
+                const std::vector<const std::vector<FaceSample>*>& samples, double share,
+                std::vector<FaceFit>& fits, double& worst) {
   std::vector<Side> sides;
   std::vector<std::size_t> side(faces.size());
   std::vector<gp_Ax3> old(faces.size());
