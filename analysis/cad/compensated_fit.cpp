@@ -122,7 +122,8 @@ Handle(Geom_BSplineSurface) bspline_surface(const TopoDS_Face&, const std::vecto
 
 // The plane through the samples, weighted by 1 / allowance^2 (least squares), when every sample
 // lies within its allowance.
-bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s, double share, FaceFit& fit) {
+bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s,
+               const CompensatedShapeSettings& settings, FaceFit& fit) {
   Vec3 mean = Vec3::Zero();
   double weight_sum = 0.0;
   for (const auto& p : s) {
@@ -137,7 +138,7 @@ bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s, double share
   std::vector<double> residual;
   for (const auto& p : s) residual.push_back(std::abs(normal.dot(p.moved - mean)));
   fit.canonical_deviation_mm = *std::max_element(residual.begin(), residual.end());
-  if (!within_allowance(s, residual, share)) return false;
+  if (!within_allowance(s, residual, settings)) return false;
   const double deviation = fit.canonical_deviation_mm;
   fit = plane_surface(old, mean, normal);
   fit.canonical_deviation_mm = fit.max_deviation_mm = deviation;
@@ -146,7 +147,8 @@ bool fit_plane(const gp_Ax3& old, const std::vector<FaceSample>& s, double share
 
 // The cylinder through the samples: the axis along the moved grid columns (constant u), the
 // circle by Kasa's algebraic fit across it; accepted when every sample lies within `tolerance`.
-bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double share, FaceFit& fit) {
+bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s,
+                  const CompensatedShapeSettings& settings, FaceFit& fit) {
   std::vector<std::pair<int, const FaceSample*>> low, high;  // per column: lowest/highest row
   int columns = 0;
   for (const auto& p : s) columns = std::max(columns, p.column + 1);
@@ -188,7 +190,7 @@ bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double sh
     mid += p.moved;
   }
   fit.canonical_deviation_mm = worst;
-  if (!within_allowance(s, residual, share)) return false;
+  if (!within_allowance(s, residual, settings)) return false;
   mid /= static_cast<double>(s.size());
   Vec3 x = mid - center;
   x = (x - x.dot(axis) * axis).normalized();  // u = 0 mid-face: a bend never wraps
@@ -208,11 +210,14 @@ bool fit_cylinder(const gp_Ax3& old, const std::vector<FaceSample>& s, double sh
 }  // namespace
 
 bool within_allowance(const std::vector<FaceSample>& samples, const std::vector<double>& residual,
-                      double share) {
+                      const CompensatedShapeSettings& settings) {
   std::size_t within = 0;
-  for (std::size_t i = 0; i < samples.size(); ++i)
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (!(residual[i] <= settings.max_canonical_deviation_mm)) return false;
     within += residual[i] <= samples[i].allowance_mm ? 1 : 0;
-  return static_cast<double>(within) >= share * static_cast<double>(samples.size());
+  }
+  return static_cast<double>(within) >=
+         settings.canonical_share * static_cast<double>(samples.size());
 }
 
 FaceFit plane_surface(const gp_Ax3& old, const Vec3& point, Vec3 normal) {
@@ -244,12 +249,12 @@ FaceFit fit_face(const TopoDS_Face& face, const std::vector<FaceSample>& samples
   FaceFit fit;
   const GeomAdaptor_Surface old(BRep_Tool::Surface(face));
   if (may_be_canonical && old.GetType() == GeomAbs_Plane &&
-      fit_plane(old.Plane().Position(), samples, settings.canonical_share, fit)) {
+      fit_plane(old.Plane().Position(), samples, settings, fit)) {
     fit.same_parameters = false;
     return fit;
   }
   if (may_be_canonical && old.GetType() == GeomAbs_Cylinder &&
-      fit_cylinder(old.Cylinder().Position(), samples, settings.canonical_share, fit)) {
+      fit_cylinder(old.Cylinder().Position(), samples, settings, fit)) {
     fit.same_parameters = false;
     return fit;
   }

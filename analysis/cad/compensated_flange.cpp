@@ -45,8 +45,9 @@ std::size_t side_of(const gp_Ax3& plane, std::vector<Side>& sides) {
 }  // namespace
 
 bool fit_flange(const std::vector<TopoDS_Face>& faces,
-                const std::vector<const std::vector<FaceSample>*>& samples, double share,
-                std::vector<FaceFit>& fits, double& worst) {
+                const std::vector<const std::vector<FaceSample>*>& samples,
+                const CompensatedShapeSettings& settings, std::vector<FaceFit>& fits,
+                double& worst) {
   std::vector<Side> sides;
   std::vector<std::size_t> side(faces.size());
   std::vector<gp_Ax3> old(faces.size());
@@ -78,7 +79,7 @@ bool fit_flange(const std::vector<TopoDS_Face>& faces,
       residual.push_back(std::abs(normal.dot(s.moved - sides[side[f]].mean)));
       worst = std::max(worst, residual.back());
     }
-  if (!within_allowance(all, residual, share)) return false;
+  if (!within_allowance(all, residual, settings)) return false;
   fits.clear();
   for (std::size_t f = 0; f < faces.size(); ++f) {
     fits.push_back(plane_surface(old[f], sides[side[f]].mean, normal));

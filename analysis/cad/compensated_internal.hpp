@@ -55,17 +55,19 @@ FaceFit plane_surface(const gp_Ax3& old, const Vec3& point, Vec3 normal);
 /// The planar faces of one flange moved together: one normal for all, one plane per side of
 /// the sheet (faces whose old planes coincide). Samples are weighted by 1 / allowance^2, so the
 /// well-measured interior decides over a blurred bend line. fits[i] is faces[i]'s plane; false
-/// (fits untouched) when a face is not a plane or fewer than `share` of the samples lie within
-/// their allowance (within_allowance): a real form defect, the faces are then refitted one by
+/// (fits untouched) when a face is not a plane or the samples do not lie within their
+/// allowance (within_allowance): a real form defect, the faces are then refitted one by
 /// one. `worst` is the largest distance.
 bool fit_flange(const std::vector<TopoDS_Face>& faces,
-                const std::vector<const std::vector<FaceSample>*>& samples, double share,
-                std::vector<FaceFit>& fits, double& worst);
+                const std::vector<const std::vector<FaceSample>*>& samples,
+                const CompensatedShapeSettings& settings, std::vector<FaceFit>& fits,
+                double& worst);
 
-/// At least `share` of the samples lie within their allowance (residual[i]: sample i's distance
-/// from the plane or cylinder).
+/// At least settings.canonical_share of the samples lie within their allowance and none
+/// beyond settings.max_canonical_deviation_mm (residual[i]: sample i's distance from the plane
+/// or cylinder).
 bool within_allowance(const std::vector<FaceSample>& samples, const std::vector<double>& residual,
-                      double share);
+                      const CompensatedShapeSettings& settings);
 
 /// A B-spline curve through `points` at `parameters` (ascending); its largest distance from
 /// them in `max_deviation_mm`.

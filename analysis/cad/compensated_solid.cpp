@@ -318,8 +318,7 @@ void fit_flanges(const CadShape& shape, Sampling& s, const CompensatedShapeSetti
     }
     std::vector<FaceFit> fits;
     double worst = 0.0;
-    if (seam || !compensated::fit_flange(faces, samples, settings.canonical_share, fits, worst))
-      continue;
+    if (seam || !compensated::fit_flange(faces, samples, settings, fits, worst)) continue;
     for (std::size_t f = 0; f < faces.size(); ++f) {
       FaceData& d = s.face[static_cast<std::size_t>(flange.face_ids[f])];
       d.fit = fits[f];

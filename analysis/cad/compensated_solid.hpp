@@ -57,6 +57,9 @@ struct CompensatedShapeSettings {
   /// where the field extrapolates (a corner the scan barely reaches) a few samples stray by
   /// more than its scatter says; a real form defect covers a region, not a few samples.
   double canonical_share = 0.95;
+  /// ... and none of them farther than this (mm): the bound on a plane's or cylinder's
+  /// deviation from the moved samples.
+  double max_canonical_deviation_mm = 0.3;
   /// A face with fewer of its samples covered by the field is refused (the error names it);
   /// its other uncovered samples take the offset of the nearest covered sample.
   double min_face_coverage = 0.5;
