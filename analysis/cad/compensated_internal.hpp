@@ -69,6 +69,11 @@ bool fit_flange(const std::vector<TopoDS_Face>& faces,
 bool within_allowance(const std::vector<FaceSample>& samples, const std::vector<double>& residual,
                       const CompensatedShapeSettings& settings);
 
+/// q put on every plane or cylinder of `fits` at once (alternating projections): a moved edge
+/// sample onto where its canonical faces meet, a vertex onto their common point. Unchanged
+/// when `fits` is empty.
+Vec3 onto_surfaces(const std::vector<const FaceFit*>& fits, Vec3 q);
+
 /// A B-spline curve through `points` at `parameters` (ascending); its largest distance from
 /// them in `max_deviation_mm`.
 Handle(Geom_BSplineCurve) fit_curve(const std::vector<double>& parameters,

@@ -15,6 +15,8 @@
 #include <Standard_Failure.hxx>
 #include <TopExp.hxx>
 #include <TopExp_Explorer.hxx>
+#include <TopTools_IndexedDataMapOfShapeListOfShape.hxx>
+#include <TopTools_ListIteratorOfListOfShape.hxx>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -45,7 +47,8 @@ struct FaceData {
   std::vector<FaceSample> samples;  // inside grid samples, then boundary samples
   std::vector<int> index;           // inside samples' indices into the point batch
   Eigen::Vector4d box = Eigen::Vector4d::Zero();
-  bool seam = false;  // an edge bounds the face twice (a closed surface): never canonical
+  bool seam = false;          // an edge bounds the face twice (a closed surface): never canonical
+  double boundary_gap = 0.0;  // how far its boundary samples lie from the refit
   FaceFit fit;
   CompensatedFace report;
 };
@@ -59,6 +62,7 @@ struct Sampling {
   std::vector<Vec3> offset;  // per point, after filling the uncovered ones
   std::vector<bool> covered;
   std::vector<double> uncertainty;  // the field's, per point (mm)
+  std::vector<Vec3> vertex_points;  // where each vertex goes
   int add(const gp_Pnt& p) {
     points.emplace_back(p.X(), p.Y(), p.Z());
     return static_cast<int>(points.size()) - 1;
@@ -185,6 +189,7 @@ void face_deviations(FaceData& d, std::vector<double>& all) {
     const Eigen::Vector2d uv = d.fit.same_parameters ? s.uv : d.fit.uv_of(s.moved);
     const double e = (v3(d.fit.surface->Value(uv.x(), uv.y()).XYZ()) - s.moved).norm();
     d.report.max_deviation_mm = std::max(d.report.max_deviation_mm, e);
+    if (s.row < 0) d.boundary_gap = std::max(d.boundary_gap, e);
     all.push_back(e);
   }
 }
@@ -193,9 +198,10 @@ void face_deviations(FaceData& d, std::vector<double>& all) {
 // the shape around it with the same topology.
 class FieldModification : public BRepTools_Modification {
  public:
+  /// loose: every face's tolerance covers its samples' scatter (see rebuild).
   FieldModification(const Sampling& s, const TopTools_IndexedMapOfShape& faces,
-                    std::vector<Vec3> vertex_points)
-      : s_(s), faces_(faces), vertex_points_(std::move(vertex_points)) {}
+                    std::vector<Vec3> vertex_points, bool loose)
+      : s_(s), faces_(faces), vertex_points_(std::move(vertex_points)), loose_(loose) {}
 
   Standard_Boolean NewSurface(const TopoDS_Face& f, Handle(Geom_Surface) & surface,
                               TopLoc_Location& location, Standard_Real& tolerance,
@@ -204,7 +210,11 @@ class FieldModification : public BRepTools_Modification {
     const FaceData& d = face(f);
     surface = d.fit.surface;
     location = TopLoc_Location();
-    tolerance = std::max(BRep_Tool::Tolerance(f), d.report.max_deviation_mm);
+    // A plane or cylinder meets its edges (project_onto_canonical): its tolerance stays, the
+    // scatter it leaves out is no gap; a B-spline only follows its boundary that closely.
+    tolerance =
+        std::max(BRep_Tool::Tolerance(f),
+                 d.fit.same_parameters || loose_ ? d.report.max_deviation_mm : d.boundary_gap);
     reverse_wires = reverse_face = Standard_False;
     return Standard_True;
   }
@@ -269,7 +279,23 @@ class FieldModification : public BRepTools_Modification {
   const Sampling& s_;
   const TopTools_IndexedMapOfShape& faces_;
   std::vector<Vec3> vertex_points_;
+  bool loose_ = false;
 };
+
+// The shape rebuilt around the new geometry, its tolerances set by the gaps, and checked.
+TopoDS_Shape rebuild(const CadShape& shape, const Sampling& s, bool loose, bool& valid) {
+  const Handle(FieldModification) modification =
+      new FieldModification(s, shape.impl().faces, s.vertex_points, loose);
+  BRepTools_Modifier modifier(shape.impl().shape, modification);
+  valid = false;
+  if (!modifier.IsDone()) return {};
+  const TopoDS_Shape result = modifier.ModifiedShape(shape.impl().shape);
+  // The trimming curves were refitted apart from the edges: tolerances follow their gaps.
+  BRepLib::SameParameter(result, 1e-5, Standard_True);
+  BRepLib::UpdateTolerances(result, Standard_True);
+  valid = BRepCheck_Analyzer(result).IsValid() == Standard_True;
+  return result;
+}
 
 double percentile_95(std::vector<double> values) {
   if (values.empty()) return 0.0;
@@ -327,11 +353,64 @@ void fit_flanges(const CadShape& shape, Sampling& s, const CompensatedShapeSetti
   }
 }
 
-// A face's refit (unless its flange's fit holds it) and its distances from the moved samples.
-Expected<bool> finish_face(const TopoDS_Face& face, const CadFaceInfo& info,
-                           const CompensatedShapeSettings& settings, FaceData& d,
-                           std::vector<double>& deviations) {
-  if (d.report.flange < 0) d.fit = compensated::fit_face(face, d.samples, d.box, !d.seam, settings);
+// The planes and cylinders among `faces` (the faces around an edge or a vertex).
+std::vector<const FaceFit*> canonical_fits(const TopTools_ListOfShape& faces,
+                                           const TopTools_IndexedMapOfShape& all,
+                                           const Sampling& s) {
+  std::vector<const FaceFit*> fits;
+  for (TopTools_ListIteratorOfListOfShape it(faces); it.More(); it.Next()) {
+    const FaceFit* fit = &s.face[static_cast<std::size_t>(all.FindIndex(it.Value()) - 1)].fit;
+    if (!fit->same_parameters && std::find(fits.begin(), fits.end(), fit) == fits.end())
+      fits.push_back(fit);
+  }
+  return fits;
+}
+
+// The moved vertices and edge samples put onto the planes and cylinders that replace their
+// faces: the field's scatter those surfaces leave out would otherwise stay as a gap between an
+// edge and its faces (edge tolerances of up to 0.2 mm on a sparse scan).
+void project_onto_canonical(const CadShape::Impl& impl, Sampling& s) {
+  TopTools_IndexedDataMapOfShapeListOfShape edge_faces, vertex_faces;
+  TopExp::MapShapesAndAncestors(impl.shape, TopAbs_EDGE, TopAbs_FACE, edge_faces);
+  TopExp::MapShapesAndAncestors(impl.shape, TopAbs_VERTEX, TopAbs_FACE, vertex_faces);
+  s.vertex_points.resize(static_cast<std::size_t>(s.vertices.Extent()));
+  for (int v = 1; v <= s.vertices.Extent(); ++v) {
+    const auto i = static_cast<std::size_t>(v - 1);
+    const int k = vertex_faces.FindIndex(s.vertices(v));
+    const Vec3 moved = s.points[i] + s.offset[i];
+    s.vertex_points[i] =
+        k > 0 ? compensated::onto_surfaces(canonical_fits(vertex_faces(k), impl.faces, s), moved)
+              : moved;
+  }
+  for (int e = 1; e <= s.edges.Extent(); ++e) {
+    EdgeData& d = s.edge[static_cast<std::size_t>(e - 1)];
+    const int k = edge_faces.FindIndex(s.edges(e));
+    if (!d.moved || k == 0) continue;
+    const std::vector<const FaceFit*> fits = canonical_fits(edge_faces(k), impl.faces, s);
+    for (Vec3& p : d.points) p = compensated::onto_surfaces(fits, p);
+    // The ends are the vertices (the first at the curve's first parameter).
+    TopoDS_Vertex first, last;
+    TopExp::Vertices(TopoDS::Edge(s.edges(e)), first, last);
+    if (!first.IsNull())
+      d.points.front() = s.vertex_points[static_cast<std::size_t>(s.vertices.FindIndex(first) - 1)];
+    if (!last.IsNull())
+      d.points.back() = s.vertex_points[static_cast<std::size_t>(s.vertices.FindIndex(last) - 1)];
+  }
+}
+
+// A B-spline face refitted through its boundary as projected (project_onto_canonical).
+void refit_bspline(const TopoDS_Face& face, const Sampling& s,
+                   const CompensatedShapeSettings& settings, FaceData& d) {
+  const double tried = d.fit.canonical_deviation_mm;  // of the plane/cylinder it is not
+  d.samples.resize(d.index.size());
+  add_boundary(face, d, s, settings);
+  d.fit = compensated::fit_face(face, d.samples, d.box, false, settings);
+  d.fit.canonical_deviation_mm = tried;
+}
+
+// A face's distances from its moved samples, and the limit on a B-spline's.
+Expected<bool> check_face(const CadFaceInfo& info, const CompensatedShapeSettings& settings,
+                          FaceData& d, std::vector<double>& deviations) {
   d.report.surface = d.fit.kind;
   d.report.canonical_deviation_mm = d.fit.canonical_deviation_mm;
   face_deviations(d, deviations);
@@ -362,26 +441,43 @@ Expected<bool> refit(const CadShape& shape, const OffsetField& field, Sampling& 
   auto moved = [&](int i) { return Vec3(s.points[i] + s.offset[i]); };
   for (const Vec3& o : s.offset) out.max_offset_mm = std::max(out.max_offset_mm, o.norm());
   for (const double u : s.uncertainty) out.max_uncertainty_mm = std::max(out.max_uncertainty_mm, u);
-  for (EdgeData& e : s.edge) {
-    if (!e.moved) continue;
-    for (const int i : e.index) e.points.push_back(moved(i));
-    e.curve = compensated::fit_curve(e.t, e.points, e.deviation);
-    out.max_deviation_mm = std::max(out.max_deviation_mm, e.deviation);
-    for (std::size_t k = 0; k < e.t.size(); ++k)
-      deviations.push_back((v3(e.curve->Value(e.t[k]).XYZ()) - e.points[k]).norm());
-  }
+  for (EdgeData& e : s.edge)
+    if (e.moved)
+      for (const int i : e.index) e.points.push_back(moved(i));
   const std::vector<CadFaceInfo> info = describe_faces(shape);
   for (int f = 0; f < impl.faces.Extent(); ++f)
     if (auto done = prepare_face(impl.face(f), info[static_cast<std::size_t>(f)], s, settings,
                                  s.face[static_cast<std::size_t>(f)]);
         !done)
       return done.error();
+  // Flanges as one, then every other face alone; edges and vertices onto the canonical faces,
+  // the B-spline faces through them.
   fit_flanges(shape, s, settings);
   for (int f = 0; f < impl.faces.Extent(); ++f) {
     FaceData& d = s.face[static_cast<std::size_t>(f)];
-    if (auto done =
-            finish_face(impl.face(f), info[static_cast<std::size_t>(f)], settings, d, deviations);
-        !done)
+    if (d.report.flange < 0)
+      d.fit = compensated::fit_face(impl.face(f), d.samples, d.box, !d.seam, settings);
+  }
+  project_onto_canonical(impl, s);
+  for (int f = 0; f < impl.faces.Extent(); ++f) {
+    FaceData& d = s.face[static_cast<std::size_t>(f)];
+    if (d.fit.same_parameters) {
+      refit_bspline(impl.face(f), s, settings, d);
+    } else {  // the boundary as projected: how far the face lies from its edges
+      d.samples.resize(d.index.size());
+      add_boundary(impl.face(f), d, s, settings);
+    }
+  }
+  for (EdgeData& e : s.edge) {
+    if (!e.moved) continue;
+    e.curve = compensated::fit_curve(e.t, e.points, e.deviation);
+    out.max_deviation_mm = std::max(out.max_deviation_mm, e.deviation);
+    for (std::size_t k = 0; k < e.t.size(); ++k)
+      deviations.push_back((v3(e.curve->Value(e.t[k]).XYZ()) - e.points[k]).norm());
+  }
+  for (int f = 0; f < impl.faces.Extent(); ++f) {
+    FaceData& d = s.face[static_cast<std::size_t>(f)];
+    if (auto done = check_face(info[static_cast<std::size_t>(f)], settings, d, deviations); !done)
       return done.error();
     out.max_deviation_mm = std::max(out.max_deviation_mm, d.report.max_deviation_mm);
     out.faces.push_back(d.report);
@@ -401,20 +497,18 @@ Expected<CompensatedShape> compensated_shape(const CadShape& shape, const Offset
     std::vector<double> deviations;
     if (auto done = refit(shape, field, s, settings, out, deviations); !done) return done.error();
     out.p95_deviation_mm = percentile_95(deviations);
-    std::vector<Vec3> vertex_points;
-    for (int v = 0; v < s.vertices.Extent(); ++v)
-      vertex_points.push_back(s.points[static_cast<std::size_t>(v)] +
-                              s.offset[static_cast<std::size_t>(v)]);
-    const Handle(FieldModification) modification =
-        new FieldModification(s, shape.impl().faces, std::move(vertex_points));
-    BRepTools_Modifier modifier(shape.impl().shape, modification);
-    if (!modifier.IsDone())
-      return fail(ErrorCode::kAnalysisFailed, "compensated shape: the shape could not be rebuilt");
-    const TopoDS_Shape result = modifier.ModifiedShape(shape.impl().shape);
-    // The trimming curves were refitted apart from the edges: tolerances follow their gaps.
-    BRepLib::SameParameter(result, 1e-5, Standard_True);
-    BRepLib::UpdateTolerances(result, Standard_True);
-    out.valid = BRepCheck_Analyzer(result).IsValid() == Standard_True;
+    // Tight first: a plane's or cylinder's tolerance only covers its gap to its projected
+    // edges. Where the checker then finds a trimming curve crossing itself (a pcurve refitted
+    // along a flange-bend tangency, which the projection leaves to within the field's
+    // scatter), the faces take that scatter as tolerance, as a B-spline face does.
+    TopoDS_Shape result = rebuild(shape, s, false, out.valid);
+    if (!out.valid) result = rebuild(shape, s, true, out.valid);
+    for (TopExp_Explorer x(result, TopAbs_EDGE); x.More(); x.Next())
+      out.max_tolerance_mm =
+          std::max(out.max_tolerance_mm, BRep_Tool::Tolerance(TopoDS::Edge(x.Current())));
+    for (TopExp_Explorer x(result, TopAbs_VERTEX); x.More(); x.Next())
+      out.max_tolerance_mm =
+          std::max(out.max_tolerance_mm, BRep_Tool::Tolerance(TopoDS::Vertex(x.Current())));
     if (!out.valid)
       return fail(ErrorCode::kAnalysisFailed,
                   "compensated shape: OpenCASCADE's checker (BRepCheck_Analyzer) finds the moved "

@@ -86,7 +86,10 @@ struct CompensatedShape {
   double p95_deviation_mm = 0.0;
   double max_offset_mm = 0.0;       ///< longest displacement applied
   double max_uncertainty_mm = 0.0;  ///< largest field uncertainty at a sample
-  bool valid = false;               ///< BRepCheck_Analyzer found the shape valid
+  /// The result's largest edge or vertex tolerance (mm): how far the refitted edges lie from
+  /// the faces they bound (BRepLib::SameParameter).
+  double max_tolerance_mm = 0.0;
+  bool valid = false;  ///< BRepCheck_Analyzer found the shape valid
 };
 
 /// Moves `shape` by `offsets`. Errors: an empty shape, a face the field does not cover

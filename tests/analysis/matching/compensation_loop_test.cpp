@@ -106,9 +106,9 @@ parts::CadPart compensate(const parts::CadPart& die, const v1::InspectionReport&
                   f.canonical_deviation_mm);
   std::printf(
       "[ compensate ] refit deviation max %.4f mm, p95 %.4f mm, largest move %.3f mm, field "
-      "uncertainty up to %.4f mm\n",
+      "uncertainty up to %.4f mm, largest edge tolerance %.4f mm\n",
       moved->max_deviation_mm, moved->p95_deviation_mm, moved->max_offset_mm,
-      moved->max_uncertainty_mm);
+      moved->max_uncertainty_mm, moved->max_tolerance_mm);
   EXPECT_TRUE(write_step_atomically(moved->shape, path));
   auto loaded = parts::load_cad_part(path);
   EXPECT_TRUE(loaded) << loaded.message();
@@ -185,7 +185,7 @@ std::string case_name(std::size_t index) {
 
 INSTANTIATE_TEST_SUITE_P(
     Parts, CompensationLoop,
-    ::testing::Values(LoopCase{"hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}, 120'000, 0.2},
+    ::testing::Values(LoopCase{"hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}, 120'000, 0.1},
                       LoopCase{"openamr-MMP.03.00.00.003_Motor_bracket.step",
                                nullptr,
                                {1.5, 1.0, 2.0, 0.8},
@@ -194,7 +194,7 @@ INSTANTIATE_TEST_SUITE_P(
                       // A third of the points: the field twice as noisy; its flanges must stay
                       // planes (docs/matching.md "Why planes and cylinders stay canonical").
                       LoopCase{
-                          "hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}, 40'000, 0.2, true}),
+                          "hat_solid_loop", &hat_solid(), {2.0, 1.2, 1.6, 0.8}, 40'000, 0.1, true}),
     [](const ::testing::TestParamInfo<LoopCase>& param) { return case_name(param.index); });
 
 }  // namespace
