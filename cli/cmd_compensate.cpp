@@ -99,9 +99,10 @@ void print_summary(const analysis::CompensatedShape& c, const std::string& out) 
   std::snprintf(line, sizeof line,
                 "wrote %s: %zu faces (%d planes, %d cylinders, %d B-splines), valid solid/shell "
                 "(BRepCheck_Analyzer)\nlargest displacement %.4f mm; refit deviation from the "
-                "moved samples: max %.5f mm, p95 %.5f mm; field uncertainty up to %.4f mm\n",
+                "moved samples: max %.5f mm, p95 %.5f mm; field uncertainty up to %.4f mm; "
+                "largest edge tolerance %.4f mm\n",
                 out.c_str(), c.faces.size(), planes, cylinders, bsplines, c.max_offset_mm,
-                c.max_deviation_mm, c.p95_deviation_mm, c.max_uncertainty_mm);
+                c.max_deviation_mm, c.p95_deviation_mm, c.max_uncertainty_mm, c.max_tolerance_mm);
   std::cout << line;
 }
 
