@@ -11,6 +11,7 @@
 
 #include "analysis/cad/compensated_solid.hpp"
 #include "analysis/cad/import.hpp"
+#include "analysis/cad/segmentation.hpp"
 #include "analysis/io/file_io.hpp"
 #include "analysis/io/sha256.hpp"
 #include "analysis/matching/field_evaluation.hpp"
@@ -106,6 +107,28 @@ void print_summary(const analysis::CompensatedShape& c, const std::string& out) 
   std::cout << line;
 }
 
+// The die as `springscan model` and the simulator will read it back: the same flanges and bends
+// as the CAD it moved, or a warning that names what is lost. A real form defect (curl, twist)
+// compensated into B-spline faces loses its flanges rightly, so this warns rather than refuses;
+// a field too sparse or noisy for its flanges to stay planes loses them too (docs/matching.md).
+void report_reimport(const analysis::CadShape& die, const analysis::CadShape& compensated,
+                     const Logger& log) {
+  const auto before = analysis::segment_cad(die);
+  const auto after = analysis::segment_cad(compensated);
+  const std::string counts = std::to_string(after.flanges.size()) + " flanges and " +
+                             std::to_string(after.bends.size()) + " bends";
+  if (after.flanges.size() == before.flanges.size() && after.bends.size() == before.bends.size()) {
+    std::cout << "re-imports with " << counts << ", as the CAD\n";
+    return;
+  }
+  log.warning("the compensated die re-imports with " + counts + " where the CAD has " +
+              std::to_string(before.flanges.size()) + " and " +
+              std::to_string(before.bends.size()) +
+              ": faces that did not stay planes or cylinders are B-splines (a real curl, or a "
+              "field too sparse or noisy for them: a denser scan, or --canonical-tolerance); "
+              "springscan model and a press simulation will not see those flanges and bends");
+}
+
 }  // namespace
 
 int compensate_main(int argc, char** argv) {
@@ -172,6 +195,7 @@ int compensate_main(int argc, char** argv) {
               std::to_string(f.max_offset_mm) + " mm, field coverage " +
               std::to_string(f.coverage));
   print_summary(*compensated, out);
+  report_reimport(*die, compensated->shape, log);
   return kExitOk;
 }
 

@@ -21,6 +21,7 @@ check() { if ! eval "$1"; then echo "FAILED: $1" >&2; exit 1; fi; }
 check 'grep -q "^wrote .*die.step: 9 faces" "$tmp/stdout"'
 check 'grep -q "valid solid/shell" "$tmp/stdout"'
 check 'grep -q "refit deviation from the moved samples: max" "$tmp/stdout"'
+check 'grep -q "^re-imports with 5 flanges and 4 bends, as the CAD" "$tmp/stdout"'
 check 'test -z "$(ls -A "$tmp" | grep occt)"'
 
 "$bin" model --json "$demo/hat-profile.step" >"$tmp/nominal.json"
