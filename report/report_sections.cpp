@@ -250,6 +250,18 @@ std::string segment_table(const v1::InspectionReport& report) {
   return html + "</table>";
 }
 
+// "± 0.012°"; n/a where the report has no U (before the uncertainty stage).
+std::string plus_minus(double u, const char* unit) {
+  return u > 0.0 ? "\u00b1 " + fixed(u, 3) + unit : "n/a";
+}
+
+// The frame the results are in: "datum", "best_fit", or the datum frame that was not made.
+std::string result_frame(const v1::Alignment& a) {
+  if (a.method().empty()) return "n/a";
+  return a.achieved() || a.failure().empty() ? a.method()
+                                             : a.method() + " (datum frame not achieved)";
+}
+
 std::string global_fit_table(const v1::InspectionReport& report) {
   const auto& fit = report.global_fit();
   std::string translation = "n/a", rotation = "n/a";
@@ -272,7 +284,14 @@ std::string global_fit_table(const v1::InspectionReport& report) {
                    {"RMS final", mm(fit.rms_final())},
                    {"Inliers", count(fit.inliers())},
                    {"Translation scan \u2192 CAD", translation},
-                   {"Rotation angle scan \u2192 CAD", rotation}});
+                   {"Rotation angle scan \u2192 CAD", rotation},
+                   {"Result frame", result_frame(report.alignment())},
+                   // The result frame's expanded uncertainty (k = 2): how far the frame every
+                   // result is given in may be turned and moved (docs/uncertainty.md).
+                   {"Result frame U rotation (k = 2)",
+                    plus_minus(report.alignment().uncertainty_rotation_deg(), "\u00b0")},
+                   {"Result frame U translation (k = 2)",
+                    plus_minus(report.alignment().uncertainty_translation_mm(), " mm")}});
 }
 
 std::string reduction_table(const v1::ReductionReport& r) {

@@ -219,6 +219,35 @@ TEST(HtmlReportAlone, UndecidedShowsValuesWithTheirUAndEachDecision) {
   EXPECT_NE(html->find("Decided by the simple rule"), std::string::npos);
 }
 
+// The result frame's U beside the global fit's figures (issue 41): rotation and translation, each
+// with its unit; n/a where the report has none.
+TEST(HtmlReportAlone, ShowsTheResultFramesUncertainty) {
+  auto f = testing::make_fixture(0);
+  auto html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("Result frame U rotation (k = 2)</td><td class='num'>n/a"),
+            std::string::npos);
+  v1::Alignment* a = f.report.mutable_alignment();
+  a->set_method("datum");
+  a->set_achieved(true);
+  a->set_uncertainty_rotation_deg(0.0126);
+  a->set_uncertainty_translation_mm(0.25);
+  html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("Result frame</td><td class='num'>datum<"), std::string::npos);
+  EXPECT_NE(html->find("Result frame U rotation (k = 2)</td><td class='num'>\u00b1 0.013\u00b0"),
+            std::string::npos);
+  EXPECT_NE(html->find("Result frame U translation (k = 2)</td><td class='num'>\u00b1 0.250 mm"),
+            std::string::npos);
+  a->set_method("best_fit");
+  a->set_achieved(false);
+  a->set_failure("datum A not measurable");
+  html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("Result frame</td><td class='num'>best_fit (datum frame not achieved)<"),
+            std::string::npos);
+}
+
 // The compensation arrows read against the deviation map: haloed, at a round drawing scale, with
 // a key arrow whose drawn length is to scale. The fixture's vectors lie in the section plane (the
 // view the figure picks), the longest 0.6 * sin(2 pi 14.5 / 60) = 0.599 mm long.
