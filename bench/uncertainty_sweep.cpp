@@ -5,7 +5,8 @@
 //   ./build/bench/uncertainty_sweep --seed S [--cases N] [--production N] [--points P]
 //
 // --cases profile cases per profile family (clean, noisy, curled wall, short flange);
-// --production cases per production family (sigma 0.02; 0.05 with 2 % outliers; one-sided view).
+// --production cases per production family (sigma 0.02; 0.05 with 2 % outliers; one-sided view;
+// from below).
 // Exit 1 on a crash only: the table is for the docs and for CI's log.
 #include <cstdio>
 #include <cstdlib>
@@ -25,30 +26,37 @@ int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
               static_cast<unsigned long long>(seed), cases, production,
               static_cast<long long>(points));
   std::mt19937_64 rng(seed);
-  std::vector<testing::CoverageSample> samples;
+  testing::CoverageStudy study;
   int crashes = 0;
   using testing::ProfileFamily;
   for (ProfileFamily f : {ProfileFamily::kClean, ProfileFamily::kNoisy, ProfileFamily::kCurled,
                           ProfileFamily::kShortFlange})
     for (int k = 0; k < cases; ++k) try {
-        testing::run_profile_case(f, rng, points / 4, samples);
+        testing::run_profile_case(f, rng, points / 4, study);
       } catch (const std::exception& e) {
         ++crashes;
         std::printf("CRASH: %s\n", e.what());
       }
   for (int k = 0; k < production; ++k)
-    for (int variant = 0; variant < 3; ++variant) try {
+    for (int variant = 0; variant < 4; ++variant) try {
         const std::string& part = production_parts()[rng() % production_parts().size()];
-        testing::run_production_case(part, variant == 1 ? 0.05 : 0.02, variant == 2, rng, points,
-                                     samples);
+        using testing::ProductionView;
+        const ProductionView view = variant == 2   ? ProductionView::kOneSided
+                                    : variant == 3 ? ProductionView::kFromBelow
+                                                   : ProductionView::kTwoPasses;
+        testing::run_production_case(part, variant == 1 ? 0.05 : 0.02, view, rng, points, study);
       } catch (const std::exception& e) {
         ++crashes;
         std::printf("CRASH: %s\n", e.what());
       }
-  for (const testing::CoverageSample& s : samples)
-    std::printf("%s | %s | error %+.4f U %.4f%s\n", s.kind.c_str(), s.family.c_str(), s.error, s.U,
-                std::abs(s.error) > s.U ? "  OUTSIDE" : "");
-  testing::print_table(testing::coverage_table(samples));
+  for (const testing::CoverageSample& s : study.samples)
+    std::printf("%s | %s | error %+.4f U %.4f%s%s%s\n", s.kind.c_str(), s.family.c_str(), s.error,
+                s.U, std::abs(s.error) > s.U ? "  OUTSIDE" : "", s.note.empty() ? "" : " | ",
+                s.note.c_str());
+  // Left out of the table, never silently: the station failed these parts as ambiguous.
+  std::printf("ambiguous (left out, the part fails): %d\n", study.ambiguous);
+  for (const std::string& c : study.ambiguous_cases) std::printf("  %s\n", c.c_str());
+  testing::print_table(testing::coverage_table(study.samples));
   return crashes == 0 ? 0 : 1;
 }
 

@@ -20,6 +20,11 @@ constexpr double kTangentPointMm = 0.1;
 // One flange's fits as the uncertainty sees them.
 struct FlangeModel {
   const FlangeFit* fit = nullptr;
+  std::vector<std::uint8_t> inlier;  // the points its plane is made of (per shape.local)
+  double band_mm = 0.0;              // their band about the plane (the shape's inlier threshold)
+  // The shape's points are not the skin the local fit measured (see estimate_uncertainty): the
+  // tilt is judged from the fit's own points and residual.
+  bool foreign_points = false;
   PlaneCovariance plane;
   CurlCovariance curl;  // curled flanges only
   bool ok = false;
@@ -45,6 +50,47 @@ double part_noise(const std::vector<FlangeModel>& flanges) {
   return sigma[(sigma.size() - 1) / 2];
 }
 
+// Narrows `model.inlier` to the points of the flange's plane: rounds of a least-squares plane
+// and a band of 3 robust sigmas (1.4826 MAD) of its residuals, as the local fit rejects what
+// lies off its plane. The plane's covariance is then of those points.
+void keep_plane_points(const FlangeShape& shape, FlangeModel& model) {
+  constexpr int kRounds = 4;
+  std::vector<double> residual(shape.local.size());
+  std::vector<double> magnitude;
+  for (int round = 0; round < kRounds; ++round) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < shape.local.size(); ++j) {
+      if (!model.inlier[j]) continue;
+      const Eigen::Vector3d x(1.0, shape.local[j].x(), shape.local[j].y());
+      normal += x * x.transpose();
+      rhs += x * shape.local[j].z();
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
+    if (normal(0, 0) < 12.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
+    const Eigen::Vector3d beta = ldlt.solve(rhs);
+    magnitude.clear();
+    for (std::size_t j = 0; j < shape.local.size(); ++j) {
+      const Vec3& q = shape.local[j];
+      residual[j] = q.z() - (beta(0) + beta(1) * q.x() + beta(2) * q.y());
+      if (model.inlier[j]) magnitude.push_back(std::abs(residual[j]));
+    }
+    const auto mid = magnitude.begin() + static_cast<long>(magnitude.size() / 2);
+    std::nth_element(magnitude.begin(), mid, magnitude.end());
+    const double band = 3.0 * 1.4826 * *mid;
+    if (!(band > 0.0)) return;
+    std::size_t kept = 0;
+    for (std::size_t j = 0; j < shape.local.size(); ++j)
+      kept += shape.inlier[j] && std::abs(residual[j]) <= band ? 1 : 0;
+    if (kept < 12) return;
+    for (std::size_t j = 0; j < shape.local.size(); ++j)
+      model.inlier[j] = shape.inlier[j] && std::abs(residual[j]) <= band ? 1 : 0;
+    model.band_mm = band;
+  }
+  const PlaneCovariance plane = plane_covariance(shape.local, model.inlier);
+  if (plane.ok) model.plane = plane;
+}
+
 // The unit in-plane direction across a bend with axis `axis`, in the flange's (s, t) frame.
 Eigen::Vector2d across_in_frame(const FlangeFrame& frame, const Vec3& axis) {
   const Vec3 across = frame.n.cross(axis);
@@ -52,20 +98,100 @@ Eigen::Vector2d across_in_frame(const FlangeFrame& frame, const Vec3& axis) {
   return w.norm() > 1e-9 ? Eigen::Vector2d(w.normalized()) : Eigen::Vector2d(1.0, 0.0);
 }
 
+// The least-squares slope along w (unit, in (s, t)) of h = c + b_s s + b_t t over the inliers
+// for which `keep` holds; NaN when they do not fix it.
+template <typename Keep>
+double plane_slope(const FlangeModel& f, const Eigen::Vector2d& w, Keep keep) {
+  const FlangeShape& shape = f.fit->shape;
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < shape.local.size(); ++j) {
+    const Vec3& q = shape.local[j];
+    if (!f.inlier[j] || !keep(q)) continue;
+    const Eigen::Vector3d x(1.0, q.x(), q.y());
+    normal += x * x.transpose();
+    rhs += x * q.z();
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
+  if (normal(0, 0) < 6.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive())
+    return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::Vector3d beta = ldlt.solve(rhs);
+  return beta(1) * w.x() + beta(2) * w.y();
+}
+
+// How much a flange's tilt across a bend rests on its points next to the bend (rad): the slope
+// with them less the slope without the strip of the arc a skin's inlier band can hold, a =
+// sqrt(2 R b) for the bend's radius R (up to a solid's thickness more) and the band b, widened
+// by half. Where the flange's assignment reaches into the bend's arc, those points lie on one
+// side of the plane at its end and tilt it toward the bend: a bias of one sign that grows with
+// the band (the noise), which the covariance does not see (the laser-scanned solids at sigma
+// 0.05 mm with outliers showed +0.015-0.02 deg, docs/uncertainty.md). Where the points stop
+// short of the arc, the difference is only the noise's (about 0.4 of the tilt's own sigma).
+struct EndStrip {
+  double tilt_rad = 0.0;
+  std::vector<std::uint8_t> inner;  // the plane's points without the strip (empty: not cut)
+};
+
+EndStrip end_strip(const FlangeModel& f, const Eigen::Vector2d& w, const Vec3& axis_point,
+                   double radius_mm) {
+  EndStrip out;
+  const FlangeShape& shape = f.fit->shape;
+  const Eigen::Vector2d mid(shape.frame.local(axis_point).x(), shape.frame.local(axis_point).y());
+  // Along w toward the bend: the strip is the points within a of the flange's extreme there.
+  double mean = 0.0, lo = std::numeric_limits<double>::infinity(), hi = -lo, count = 0.0;
+  for (std::size_t j = 0; j < shape.local.size(); ++j) {
+    if (!f.inlier[j]) continue;
+    const double q = w.x() * shape.local[j].x() + w.y() * shape.local[j].y();
+    mean += q, lo = std::min(lo, q), hi = std::max(hi, q), count += 1.0;
+  }
+  if (count < 12.0) return out;
+  mean /= count;
+  const double toward = w.dot(mid) >= mean ? 1.0 : -1.0;
+  constexpr double kThicknessMm = 2.0;  // a solid's outer skin bends about R + t
+  const double band = f.band_mm;
+  const double a = std::min(std::max(1.5 * std::sqrt(2.0 * (radius_mm + kThicknessMm) * band), 1.0),
+                            0.25 * (hi - lo));
+  const double end = toward > 0.0 ? hi : lo;
+  const auto inner = [&](const Vec3& q) {
+    return toward * (end - (w.x() * q.x() + w.y() * q.y())) > a;
+  };
+  const double all = plane_slope(f, w, [](const Vec3&) { return true; });
+  const double cut = plane_slope(f, w, inner);
+  if (!std::isfinite(all) || !std::isfinite(cut)) return out;
+  out.tilt_rad = std::abs(all - cut);
+  out.inner = f.inlier;
+  for (std::size_t j = 0; j < shape.local.size(); ++j)
+    if (out.inner[j] && !inner(shape.local[j])) out.inner[j] = 0;
+  return out;
+}
+
 struct Tilt {
   double fit_var = std::numeric_limits<double>::infinity();  // rad^2, from the points' noise
   double shape_rad = 0.0;        // the method's error: residual above the noise, as a whole tilt
   double end_tangent_rad = 0.0;  // the method's error of an end tangent on a curled flange
+  double end_strip_rad = 0.0;    // the plane's dependence on its points next to the bend
 };
 
 // How well flange f fixes its tilt across a bend of axis `axis` (through `axis_point`): its
 // plane, or the end tangent of its curl when the bend is measured by end tangents.
 Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point, bool end_tangent,
-                 double floor_sigma) {
+                 double floor_sigma, double radius_mm) {
   Tilt out;
   if (!f.ok) return out;
   const FlangeShape& shape = f.fit->shape;
   const Eigen::Vector2d w = across_in_frame(shape.frame, axis);
+  if (f.foreign_points) {
+    // The local fit's line-fit slope error (springback.cpp tilt_sigma_rad): its rms over the
+    // root of its points' squared spread across the bend; the shape's points give no method
+    // term here.
+    const Vec3 across = f.fit->measured_normal.cross(axis);
+    const double spread2 =
+        across.norm() > 1e-9 ? across.normalized().dot(f.fit->spread * across.normalized()) : 0.0;
+    out.fit_var = spread2 > 0.0 ? sq(std::max(f.fit->fit.rms_mm, floor_sigma)) / spread2
+                                : std::numeric_limits<double>::infinity();
+    out.shape_rad = 0.0;
+    return out;
+  }
   const bool curl = end_tangent && shape.curled && f.curl.ok;
   const double sigma = curl ? f.curl.sigma_mm : f.plane.sigma_mm;
   const double used = std::max(sigma, floor_sigma);
@@ -80,6 +206,26 @@ Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point,
   } else {
     out.fit_var = f.plane.slope_variance(w, used);
   }
+  // The bow below is judged without the end strip: arc points there are the strip's term, and
+  // the curl model would take their step for a curvature of the whole flange.
+  const auto bow = [&](const PlaneCovariance& plane, const CurlCovariance& curl_fit) {
+    if (curl || !curl_fit.ok) return 0.0;
+    const double n = static_cast<double>(curl_fit.points);
+    return std::sqrt(std::max(
+        0.0, sq(plane.sigma_mm) - sq(curl_fit.sigma_mm) * (1.0 + 3.0 * std::sqrt(2.0 / n))));
+  };
+  PlaneCovariance plane = f.plane;
+  double systematic = bow(f.plane, f.curl);
+  if (!curl) {
+    const EndStrip strip = end_strip(f, w, axis_point, radius_mm);
+    out.end_strip_rad = strip.tilt_rad;
+    if (systematic > 0.0 && !strip.inner.empty()) {  // (the inner fits only where they tell)
+      const PlaneCovariance inner_plane = plane_covariance(shape.local, strip.inner);
+      const CurlCovariance inner_curl = curl_covariance(shape.local, strip.inner);
+      if (inner_plane.ok && inner_curl.ok)
+        plane = inner_plane, systematic = bow(inner_plane, inner_curl);
+    }
+  }
   // A bow the plane does not follow (a curl too slight to be told, whose angle the end tangents
   // would define): what the curl model explains of the plane's residual variance, beyond what
   // the variance estimate's own scatter explains (3 of its standard errors, sqrt(2 / n)
@@ -88,13 +234,7 @@ Tilt flange_tilt(const FlangeModel& f, const Vec3& axis, const Vec3& axis_point,
   // the point count. A residual of rms r over a spread of rms S turns the end from the plane by
   // up to 3.9 r / S (a parabola); the study's curled walls turn by up to 1.1x that: u = 2.75 r / S.
   constexpr double kBowFactor = 2.75;
-  const double spread = f.plane.spread_mm(w);
-  double systematic = 0.0;
-  if (!curl && f.curl.ok) {
-    const double n = static_cast<double>(f.curl.points);
-    systematic = std::sqrt(std::max(
-        0.0, sq(f.plane.sigma_mm) - sq(f.curl.sigma_mm) * (1.0 + 3.0 * std::sqrt(2.0 / n))));
-  }
+  const double spread = plane.spread_mm(w);
   out.shape_rad =
       spread > 0.0 ? kBowFactor * systematic / spread : std::numeric_limits<double>::infinity();
   return out;
@@ -123,7 +263,7 @@ double strip_tilt_var(const FlangeModel& f, const BendMeasurement& m, double pos
   std::vector<Vec3> points;  // the strip's inliers, the held curl term off h
   for (std::size_t j = 0; j < shape.local.size(); ++j) {
     const Vec3& q = shape.local[j];
-    if (!shape.inlier[j] || !(std::abs(offset + along.dot(q)) <= 0.5 * window)) continue;
+    if (!f.inlier[j] || !(std::abs(offset + along.dot(q)) <= 0.5 * window)) continue;
     points.emplace_back(q.x(), q.y(), q.z() - A * (q.x() * q.x() + q.z() * q.z()));
   }
   const PlaneCovariance strip = plane_covariance(points, {});
@@ -151,13 +291,17 @@ BendBudget bend_budget(const BendMeasurement& m, const FlangeModel& a, const Fla
   BendBudget out;
   const Vec3 axis = m.axis_direction.normalized();
   const double floor_sigma = st.scanner_sigma_mm;
-  const Tilt ta = flange_tilt(a, axis, m.axis_point, m.end_tangents, floor_sigma);
-  const Tilt tb = flange_tilt(b, axis, m.axis_point, m.end_tangents, floor_sigma);
+  const double radius = m.zone.fitted && m.measured_radius_mm > 0.0 ? m.measured_radius_mm
+                                                                    : std::max(m.radius_mm, 0.0);
+  const Tilt ta = flange_tilt(a, axis, m.axis_point, m.end_tangents, floor_sigma, radius);
+  const Tilt tb = flange_tilt(b, axis, m.axis_point, m.end_tangents, floor_sigma, radius);
   out.fit_deg = std::sqrt(ta.fit_var + tb.fit_var) * kRadToDeg;
   // Flanges whose shape was not measured (too few points): the stage's own estimate, no less.
   if (!std::isfinite(out.fit_deg)) out.fit_deg = 3.0 * m.angle_sigma_deg;
-  out.shape_deg =
-      rss({ta.shape_rad, tb.shape_rad, ta.end_tangent_rad, tb.end_tangent_rad}) * kRadToDeg;
+  // The end strips' tilts are of one sign on both flanges (both toward the bend): they add.
+  out.shape_deg = rss({ta.shape_rad, tb.shape_rad, ta.end_tangent_rad, tb.end_tangent_rad,
+                       ta.end_strip_rad + tb.end_strip_rad}) *
+                  kRadToDeg;
   out.station_deg = station_angle_deg(st, extent_mm);
   out.angle_deg = rss({out.fit_deg, out.shape_deg, out.station_deg});
   if (!std::isfinite(out.angle_deg)) out.angle_deg = 180.0;  // not fixed at all: says so
@@ -248,10 +392,27 @@ UncertaintyResult estimate_uncertainty(const SpringbackResult& sb, double extent
     model.fit = &sb.flanges[f];
     const FlangeShape& shape = model.fit->shape;
     if (!model.fit->fitted || !shape.measured) continue;
-    model.plane = plane_covariance(shape.local, shape.inlier);
-    model.curl = curl_covariance(shape.local, shape.inlier);
+    model.inlier = shape.inlier;
+    model.band_mm = shape.inlier_threshold_mm;
+    model.plane = plane_covariance(shape.local, model.inlier);
+    model.curl = curl_covariance(shape.local, model.inlier);
     model.ok = model.plane.ok;
   }
+  // A flange whose shape's points scatter far more than the residual of the local fit that
+  // measured its angle, about its plane and about its curl alike (not a bow, which the curl
+  // follows), holds what that fit rejected (a solid's end face or a hole's wall within the
+  // skin's half thickness, seen from below: 0.2-0.4 mm against 0.008): the plane's own points
+  // are then the skin's, as the fit kept them.
+  for (FlangeModel& model : flanges)
+    if (model.ok && model.curl.ok && model.fit->fit.rms_mm > 0.0 &&
+        model.curl.sigma_mm > 3.0 * std::max(model.fit->fit.rms_mm, st.scanner_sigma_mm)) {
+      keep_plane_points(model.fit->shape, model);
+      model.curl = curl_covariance(model.fit->shape.local, model.inlier);
+      // Still far off a plane (the skin is a narrow strip among other faces' points): the
+      // local fit's own points and residual tell its tilt.
+      model.foreign_points =
+          model.plane.sigma_mm > 3.0 * std::max(model.fit->fit.rms_mm, st.scanner_sigma_mm);
+    }
   out.noise_mm = std::max(part_noise(flanges), st.scanner_sigma_mm);
   // 2. Each bend's angle, stations and radius; 3. each flange's shape values.
   const auto flange_of = [&](int id) -> const FlangeModel& {

@@ -74,11 +74,15 @@ TEST(Uncertainty, CoversTheTruthOfProfilesHonestly) {
   // Seeds of this test only (never accuracy_sweep's held-out ones).
   std::mt19937_64 rng(770077);
   const int per_family = kUnderSanitizer ? 1 : 6;
-  std::vector<testing::CoverageSample> samples;
+  testing::CoverageStudy study;
   using testing::ProfileFamily;
   for (ProfileFamily f : {ProfileFamily::kClean, ProfileFamily::kNoisy, ProfileFamily::kCurled,
                           ProfileFamily::kShortFlange})
-    for (int k = 0; k < per_family; ++k) testing::run_profile_case(f, rng, 30000, samples);
+    for (int k = 0; k < per_family; ++k) testing::run_profile_case(f, rng, 30000, study);
+  // The profiles are built with no two orientations alike (coverage_study.hpp): no fit may be
+  // ambiguous, and none is left out of the table.
+  EXPECT_EQ(study.ambiguous, 0);
+  const std::vector<testing::CoverageSample>& samples = study.samples;
   for (const testing::CoverageSample& s : samples) {
     EXPECT_TRUE(std::isfinite(s.U) && s.U > 0.0) << s.kind << " " << s.family;
   }
