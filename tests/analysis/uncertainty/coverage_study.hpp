@@ -158,19 +158,20 @@ inline void run_profile_case(ProfileFamily family, std::mt19937_64& rng, std::in
     const int k = b.id();
     const double nominal = std::abs(spec.bend_angles_deg[static_cast<std::size_t>(k)]);
     const double truth = nominal - parts::shaped_bend_angle_deg(spec, shape, k, mid);
-    out.push_back({"springback", name, b.springback_deg() - truth, b.springback_uncertainty_deg()});
+    out.push_back(
+        {"springback", name, b.springback_deg() - truth, b.springback_uncertainty_deg(), ""});
     // Station positions run along the bend's axis direction from its mid-width point.
     const double sign = b.axis_direction().y() < 0.0 ? -1.0 : 1.0;
     for (const v1::BendStation& s : b.angle_along_bend()) {
       const double y = mid + sign * s.position_mm();
       out.push_back({"station angle", name,
                      s.angle_deg() - parts::shaped_bend_angle_deg(spec, shape, k, y),
-                     s.angle_uncertainty_deg()});
+                     s.angle_uncertainty_deg(), ""});
     }
     if (b.has_measured_radius_mm() && b.measured_radius_mm() > 0.0)
       out.push_back({"bend radius", name,
                      b.measured_radius_mm() - spec.bend_radii_mm[static_cast<std::size_t>(k)],
-                     b.radius_uncertainty_mm()});
+                     b.radius_uncertainty_mm(), ""});
   }
   for (const v1::Segment& s : report.segments()) {
     const auto f = static_cast<std::size_t>(s.id());
@@ -179,7 +180,7 @@ inline void run_profile_case(ProfileFamily family, std::mt19937_64& rng, std::in
       continue;
     out.push_back({"curl radius", name,
                    std::abs(s.curl_radius_mm()) - std::abs(shape.curl_radius_mm[f]),
-                   s.curl_radius_uncertainty_mm()});
+                   s.curl_radius_uncertainty_mm(), ""});
   }
 }
 
