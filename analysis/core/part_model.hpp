@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstddef>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/core/point_cloud.hpp"
@@ -85,6 +87,38 @@ void closest_in_order(const SurfaceDistance& distance, std::size_t begin, std::s
   }
 }
 
+/// Point sets derived from a model, built on first use and kept with it: the global fit's
+/// boundary pass samples the tessellation 200,000 times (registration/boundary.cpp), and built
+/// on every call that was a tenth of the fit, on one thread, for the same points each time. A
+/// station analyses one model many times. Safe to use from several threads (a second caller
+/// waits for the first one's build). A copy starts empty (what it was derived from may then be
+/// changed in the copy); a model's mesh and samples are not changed once it is in use.
+class DerivedSamples {
+ public:
+  DerivedSamples() = default;
+  DerivedSamples(const DerivedSamples&) {}
+  DerivedSamples& operator=(const DerivedSamples&) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    entries_.clear();
+    return *this;
+  }
+
+  /// The cloud kept under `key`, or build() kept under it.
+  template <typename Build>
+  std::shared_ptr<const PointCloud> get(std::size_t key, Build&& build) const {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [k, cloud] : entries_)
+      if (k == key) return cloud;
+    auto cloud = std::make_shared<const PointCloud>(build());
+    entries_.emplace_back(key, cloud);
+    return cloud;
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  mutable std::vector<std::pair<std::size_t, std::shared_ptr<const PointCloud>>> entries_;
+};
+
 /// Everything the pipeline needs of the CAD side.
 struct PartModel {
   PointCloud samples;  ///< even samples with normals and face ids
@@ -97,6 +131,8 @@ struct PartModel {
   std::string source_sha256;  ///< hex SHA-256 of the file the model was built from (the report's
                               ///< input.cad_sha256: which CAD revision was measured against);
                               ///< empty for a model built in memory
+  /// Even samples of `mesh` with their triangles' normals, by sample count (the boundary's).
+  DerivedSamples tessellation_samples;
 };
 
 }  // namespace springscan::analysis

@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include "analysis/core/parallel.hpp"
@@ -126,6 +128,50 @@ void nearest_in_cell(const std::vector<Vec3>& q, const std::uint32_t* which, std
   }
 }
 
+// The value of rank `rank` (0-based) among |d|, the one nth_element puts there, on all cores:
+// a non-negative double's bits order as its value does, so a histogram of the leading bits
+// (sign, exponent and 3 bits of mantissa: an eighth of an octave) in a few parallel chunks finds
+// the bucket that holds the rank, and only that bucket's values, a few percent, are selected
+// among. nth_element over all of 1M values took ~10 ms on one thread. Nothing (the caller
+// selects among all) when a value is NaN, which has no place in that order.
+std::optional<double> magnitude_at_rank(const std::vector<double>& d, std::size_t rank) {
+  constexpr int kShift = 49;  // 64 - 1 sign - 11 exponent - 3 mantissa bits
+  constexpr std::size_t kBuckets = std::size_t{1} << (64 - kShift);
+  constexpr std::size_t kChunks = 8;  // fixed: the counts do not depend on the thread count
+  const auto bucket = [](double v) {
+    return static_cast<std::size_t>(std::bit_cast<std::uint64_t>(std::abs(v)) >> kShift);
+  };
+  const std::size_t chunk = (d.size() + kChunks - 1) / kChunks;
+  std::vector<std::vector<std::uint32_t>> counts(kChunks);
+  std::vector<char> nan(kChunks, 0);
+  for_each_block(d.size(), chunk, 0, [&](std::size_t c, std::size_t begin, std::size_t end) {
+    counts[c].assign(kBuckets, 0);
+    for (std::size_t i = begin; i < end; ++i) {
+      if (std::isnan(d[i])) nan[c] = 1;
+      ++counts[c][bucket(d[i])];
+    }
+  });
+  if (std::find(nan.begin(), nan.end(), 1) != nan.end()) return std::nullopt;
+  std::size_t below = 0, target = 0;
+  for (; target < kBuckets; ++target) {
+    std::size_t in = 0;
+    for (const auto& c : counts)
+      if (!c.empty()) in += c[target];
+    if (below + in > rank) break;
+    below += in;
+  }
+  std::vector<std::vector<double>> inside(kChunks);
+  for_each_block(d.size(), chunk, 0, [&](std::size_t c, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i)
+      if (bucket(d[i]) == target) inside[c].push_back(std::abs(d[i]));
+  });
+  std::vector<double> values;
+  for (const auto& v : inside) values.insert(values.end(), v.begin(), v.end());
+  const auto at = values.begin() + static_cast<std::ptrdiff_t>(rank - below);
+  std::nth_element(values.begin(), at, values.end());
+  return *at;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> nearest_samples(const std::vector<Vec3>& points, const KdTree& tree,
@@ -240,10 +286,14 @@ DeviationStatistics deviation_statistics(const std::vector<double>& d) {
   const auto n = static_cast<double>(d.size());
   s.mean_mm = total.sum / n;
   s.rms_mm = std::sqrt(total.sum2 / n);
-  std::vector<double> magnitude(d.size());
-  std::transform(d.begin(), d.end(), magnitude.begin(), [](double v) { return std::abs(v); });
   // Nearest rank: the smallest value with at least 95 % of the values at or below it.
   const auto rank = static_cast<std::size_t>(std::ceil(0.95 * n)) - 1;
+  if (const auto p95 = magnitude_at_rank(d, rank)) {
+    s.p95_mm = *p95;
+    return s;
+  }
+  std::vector<double> magnitude(d.size());
+  std::transform(d.begin(), d.end(), magnitude.begin(), [](double v) { return std::abs(v); });
   std::nth_element(magnitude.begin(), magnitude.begin() + static_cast<std::ptrdiff_t>(rank),
                    magnitude.end());
   s.p95_mm = magnitude[rank];

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 #include <random>
 
 #include "analysis/core/parallel.hpp"
@@ -31,16 +32,17 @@ std::optional<Error> check(const BoundarySettings& s) {
   return std::nullopt;
 }
 
-struct OrientedPoints {
-  std::vector<Vec3> points;
-  std::vector<Vec3> normals;
-};
-
 // Even samples of the tessellation (area-weighted, fixed seed, so a result is reproducible),
-// with their triangle's normal; the model's samples when there is no tessellation.
-OrientedPoints model_surface(const PartModel& model, std::size_t count) {
+// with their triangle's normal; the model's samples when there is no tessellation. Built once
+// per model and sample count (PartModel::tessellation_samples).
+PointCloud sample_surface(const PartModel& model, std::size_t count) {
   const TriangleMesh& mesh = model.mesh;
-  if (mesh.triangles.empty()) return {model.samples.points, model.samples.normals};
+  PointCloud out;
+  if (mesh.triangles.empty()) {
+    out.points = model.samples.points;
+    out.normals = model.samples.normals;
+    return out;
+  }
   std::vector<double> cumulative;
   cumulative.reserve(mesh.triangles.size());
   double total = 0.0;
@@ -49,8 +51,11 @@ OrientedPoints model_surface(const PartModel& model, std::size_t count) {
     total += 0.5 * (b - a).cross(c - a).norm();
     cumulative.push_back(total);
   }
-  OrientedPoints out;
-  if (!(total > 0.0)) return {model.samples.points, model.samples.normals};
+  if (!(total > 0.0)) {
+    out.points = model.samples.points;
+    out.normals = model.samples.normals;
+    return out;
+  }
   out.points.reserve(count);
   out.normals.reserve(count);
   std::mt19937_64 rng(0x5eed);
@@ -67,6 +72,10 @@ OrientedPoints model_surface(const PartModel& model, std::size_t count) {
     out.normals.push_back(n.norm() > 0.0 ? Vec3(n.normalized()) : Vec3::UnitZ());
   }
   return out;
+}
+
+std::shared_ptr<const PointCloud> model_surface(const PartModel& model, std::size_t count) {
+  return model.tessellation_samples.get(count, [&] { return sample_surface(model, count); });
 }
 
 // Distance of q to the model's surface near its nearest sample (along that sample's normal),
@@ -123,7 +132,7 @@ Extent extent_of(std::vector<double> values, const BoundarySettings& s) {
 }
 
 // The model's extent along u over the faces that do not look along u.
-Extent model_extent(const OrientedPoints& model, const Vec3& u, const BoundarySettings& s) {
+Extent model_extent(const PointCloud& model, const Vec3& u, const BoundarySettings& s) {
   std::vector<double> values;
   values.reserve(model.points.size());
   for (std::size_t i = 0; i < model.points.size(); ++i)
@@ -187,7 +196,7 @@ std::string mm(double v) {
 // step 2), repeated while the shift changes: points past the model's end only count once the
 // fit has brought them onto the surface.
 FreeDirection pin_direction(const OrderedScan& scan, Transform& T, const KdTree& tree,
-                            const std::vector<Vec3>& normals, const OrientedPoints& model,
+                            const std::vector<Vec3>& normals, const PointCloud& model,
                             const Vec3& u, const BoundarySettings& s) {
   FreeDirection d;
   d.direction = u;
@@ -265,10 +274,10 @@ Expected<BoundaryResult> pin_to_boundary(const std::vector<Vec3>& scan, const Tr
   if (free.empty()) return out;
   OrderedScan sample{strided_sample(scan, settings.scan_points), {}};
   sample.order = search_order(sample.points, settings.threads);
-  const OrientedPoints surface = model_surface(model, settings.model_points);
+  const std::shared_ptr<const PointCloud> surface = model_surface(model, settings.model_points);
   for (const Vec3& u : free)
     out.free_directions.push_back(
-        pin_direction(sample, out.T_cad_scan, model_tree, normals, surface, u, settings));
+        pin_direction(sample, out.T_cad_scan, model_tree, normals, *surface, u, settings));
   return out;
 }
 

@@ -327,38 +327,39 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
   const FacingSample sample =
       facing_sample(in.fit_points, in.fit_normals, settings.orientation.score_points);
   const std::vector<Vec3> decisive = strided_sample(in.scan, settings.orientation.decisive_points);
-  parallel_tasks(all.size(), settings.icp.threads, [&](std::size_t k) {
+  // The rivals taken as far one after another, each on every thread (a fit's result does not
+  // depend on its thread count), then every orientation judged in parallel. Over the rivals in
+  // parallel, a single rival's fit ran on one thread while the other judged the best (a short
+  // task) and then sat idle.
+  for (std::size_t k = 1; k < all.size(); ++k) {
     Settled& r = all[k];
-    if (k > 0) {
-      r.candidate = rivals[k - 1];
-      GlobalFitSettings serial = settings;
-      serial.icp.threads = serial.boundary.threads = 1;  // parallel over the rivals instead
-      auto icp_fit = final_icp(in.fit_points, in.model_tree, in.model.samples.normals,
-                               choice.candidates[r.candidate].T_cad_scan, serial, in.fit_normals);
-      if (!icp_fit) {
-        errors[k] = icp_fit.message();
-        return;
-      }
-      if (auto e = finish_best_fit(in.exact_points, in.exact_normals, in.exact_updates,
-                                   in.model_tree, in.model.samples.normals, serial,
-                                   in.exact_updates ? serial.exact_iterations : 0,
-                                   serial.icp.trimmed_fraction, *icp_fit)) {
-        errors[k] = e->message;
-        return;
-      }
-      auto pin = pin_to_boundary(in.scan, icp_fit->T_target_source, in.model, in.model_tree,
-                                 serial.boundary);
-      if (!pin) {
-        errors[k] = pin.message();
-        return;
-      }
-      r.icp = std::move(*icp_fit);
-      r.boundary = std::move(*pin);
+    r.candidate = rivals[k - 1];
+    auto icp_fit = final_icp(in.fit_points, in.model_tree, in.model.samples.normals,
+                             choice.candidates[r.candidate].T_cad_scan, settings, in.fit_normals);
+    if (!icp_fit) {
+      errors[k] = icp_fit.message();
+      continue;
     }
-    judge(in, sample, decisive, settings.orientation, r);
-  });
+    if (auto e = finish_best_fit(in.exact_points, in.exact_normals, in.exact_updates, in.model_tree,
+                                 in.model.samples.normals, settings,
+                                 in.exact_updates ? settings.exact_iterations : 0,
+                                 settings.icp.trimmed_fraction, *icp_fit)) {
+      errors[k] = e->message;
+      continue;
+    }
+    auto pin = pin_to_boundary(in.scan, icp_fit->T_target_source, in.model, in.model_tree,
+                               settings.boundary);
+    if (!pin) {
+      errors[k] = pin.message();
+      continue;
+    }
+    r.icp = std::move(*icp_fit);
+    r.boundary = std::move(*pin);
+  }
   for (const std::string& e : errors)
     if (!e.empty()) return fail("global fit: settling the orientation: " + e);
+  parallel_tasks(all.size(), settings.icp.threads,
+                 [&](std::size_t k) { judge(in, sample, decisive, settings.orientation, all[k]); });
   const std::size_t winner = decide(all, decisive, settings, choice, fit.warnings);
   for (const Settled& r : all) choice.candidates[r.candidate].score_mm2 = r.whole_mm2;
   const Settled& w = all[winner];
