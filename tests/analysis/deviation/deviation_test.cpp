@@ -2,6 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
 #include "tests/analysis/synthetic.hpp"
 
 namespace springscan::analysis {
@@ -89,6 +95,46 @@ TEST(Deviation, BadInputs) {
   auto empty = signed_deviation({}, model, tree);
   ASSERT_TRUE(empty);
   EXPECT_EQ(empty->statistics.points, 0u);
+}
+
+// The p95 is selected by a histogram of the values' leading bits (deviation.cpp): it must be the
+// nearest-rank value of a full sort, whatever the spread (many octaves, ties, zeros of either
+// sign, infinities) and with a NaN among them (then the plain selection).
+TEST(Deviation, P95IsTheNearestRankOfTheSortedMagnitudes) {
+  std::mt19937_64 rng(37);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::uniform_int_distribution<int> octave(-30, 6);
+  for (const std::size_t n :
+       {std::size_t{1}, std::size_t{7}, std::size_t{1000}, std::size_t{200'003}}) {
+    std::vector<double> d(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      switch (i % 5) {
+        case 0:
+          d[i] = noise(rng);
+          break;
+        case 1:
+          d[i] = std::ldexp(noise(rng), octave(rng));
+          break;
+        case 2:
+          d[i] = 0.25;
+          break;  // ties
+        case 3:
+          d[i] = (i % 2 ? -0.0 : 0.0);
+          break;
+        default:
+          d[i] = -std::abs(noise(rng)) * 20.0;
+      }
+    }
+    if (n > 100) d[n / 2] = std::numeric_limits<double>::infinity();
+    std::vector<double> sorted(n);
+    for (std::size_t i = 0; i < n; ++i) sorted[i] = std::abs(d[i]);
+    std::sort(sorted.begin(), sorted.end());
+    const auto rank = static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(n))) - 1;
+    EXPECT_EQ(deviation_statistics(d).p95_mm, sorted[rank]) << n << " values";
+  }
+  const std::vector<double> with_nan = {0.3, std::nan(""), -0.1, 0.2};
+  const double p95 = deviation_statistics(with_nan).p95_mm;  // the plain selection: one of them
+  EXPECT_TRUE(std::isnan(p95) || p95 == 0.3 || p95 == 0.1 || p95 == 0.2) << p95;
 }
 
 }  // namespace
