@@ -34,8 +34,9 @@ TEST(DerivedSamples, BuiltOncePerKeyAndNotSharedByACopy) {
   EXPECT_EQ(builds, 3);
   EXPECT_EQ(d->points[0].x(), 4.0);
   copy = model;
-  EXPECT_EQ(copy.tessellation_samples.get(10, [&] { return ++builds, cloud_of(5.0); })->points[0].x(),
-            5.0);
+  EXPECT_EQ(
+      copy.tessellation_samples.get(10, [&] { return ++builds, cloud_of(5.0); })->points[0].x(),
+      5.0);
   EXPECT_EQ(a->points[0].x(), 1.0);  // the original's is kept
 }
 
