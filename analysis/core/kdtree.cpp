@@ -58,18 +58,16 @@ class NearestWithin {
 class NearestAlong {
  public:
   static constexpr std::size_t kMaxRank = 32;
-  NearestAlong(double max_squared_distance, const std::vector<Vec3>& normals,
-               const std::vector<std::uint32_t>& ids, const Vec3& direction, std::size_t rank,
-               double min_dot)
+  NearestAlong(double max_squared_distance, const std::vector<Vec3>& normals, const Vec3& direction,
+               std::size_t rank, double min_dot)
       : best_(max_squared_distance),
         normals_(normals),
-        ids_(ids),
         direction_(direction),
         min_dot_(min_dot),
         rank_(std::min(rank, kMaxRank)) {}
   bool addPoint(double squared_distance, std::uint32_t index) {
     if (!(squared_distance < best_)) return true;
-    if (normals_[ids_[index]].dot(direction_) > min_dot_) {
+    if (normals_[index].dot(direction_) > min_dot_) {
       best_ = squared_distance;
       index_ = index;
       found_ = true;
@@ -95,7 +93,6 @@ class NearestAlong {
   }
   double best_;
   const std::vector<Vec3>& normals_;
-  const std::vector<std::uint32_t>& ids_;
   const Vec3& direction_;
   double min_dot_;
   std::size_t rank_, closer_ = 0;
@@ -109,17 +106,14 @@ class NearestAlong {
 class KnnAlong {
  public:
   KnnAlong(std::size_t k, std::uint32_t* indices, double* squared_distances,
-           const std::vector<Vec3>& normals, const std::vector<std::uint32_t>& ids,
-           const Vec3& direction)
+           const std::vector<Vec3>& normals, const Vec3& direction)
       : k_(k),
         indices_(indices),
         d2_(squared_distances),
         normals_(normals),
-        ids_(ids),
         direction_(direction) {}
   bool addPoint(double squared_distance, std::uint32_t index) {
-    if (squared_distance >= worstDist() || !(normals_[ids_[index]].dot(direction_) > 0.0))
-      return true;
+    if (squared_distance >= worstDist() || !(normals_[index].dot(direction_) > 0.0)) return true;
     std::size_t i = count_ < k_ ? count_++ : k_ - 1;
     for (; i > 0 && d2_[i - 1] > squared_distance; --i) {
       d2_[i] = d2_[i - 1];
@@ -140,39 +134,21 @@ class KnnAlong {
   std::uint32_t* indices_;
   double* d2_;
   const std::vector<Vec3>& normals_;
-  const std::vector<std::uint32_t>& ids_;
   const Vec3& direction_;
 };
 
 }  // namespace
 
-// The searches read the points in the tree's leaf order (a leaf's points side by side in
-// memory, not wherever the caller's order put them): once built, the points are copied in the
-// order of nanoflann's index array, which then becomes the identity, and a result's position is
-// mapped back through `ids`. The tree, the points offered and their distances are unchanged, in
-// the same order, so every answer is the same; a leaf costs a few cache lines instead of one per
-// point.
 struct KdTree::Impl {
   Impl(std::vector<Vec3> pts, const KdTreeSettings& settings)
       : points(std::move(pts)),
         adaptor{&points},
         index(3, adaptor,
               nanoflann::KDTreeSingleIndexAdaptorParams(
-                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {
-    ids.assign(index.vAcc.begin(), index.vAcc.end());
-    leaf_points.resize(ids.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) {
-      leaf_points[i] = points[ids[i]];
-      index.vAcc[i] = static_cast<std::uint32_t>(i);
-    }
-    adaptor.points = &leaf_points;
-  }
-  std::uint32_t id(std::uint32_t leaf_position) const { return ids[leaf_position]; }
-  std::vector<Vec3> points;  ///< as given (KdTree::points)
+                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {}
+  std::vector<Vec3> points;
   PointsAdaptor adaptor;
   Index index;
-  std::vector<Vec3> leaf_points;   ///< points in leaf order: what the searches read
-  std::vector<std::uint32_t> ids;  ///< leaf position -> index into points
 };
 
 KdTree::KdTree(std::vector<Vec3> points, const KdTreeSettings& settings)
@@ -192,9 +168,7 @@ std::optional<Neighbor> KdTree::nearest(const Vec3& query, double max_distance) 
   NearestWithin result(bound);
   impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (!result.found()) return std::nullopt;
-  Neighbor n = result.neighbor();
-  n.index = impl_->id(n.index);
-  return n;
+  return result.neighbor();
 }
 
 std::size_t KdTree::knn(const Vec3& query, std::size_t k, std::uint32_t* indices,
@@ -203,9 +177,7 @@ std::size_t KdTree::knn(const Vec3& query, std::size_t k, std::uint32_t* indices
   nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> result(k);
   result.init(indices, squared_distances);
   impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
-  const std::size_t found = result.size();
-  for (std::size_t i = 0; i < found; ++i) indices[i] = impl_->id(indices[i]);
-  return found;
+  return result.size();
 }
 
 void KdTree::knn(const Vec3& query, std::size_t k, std::vector<Neighbor>& out) const {
@@ -226,7 +198,7 @@ void KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out
   const double r2 = std::nextafter(radius * radius, std::numeric_limits<double>::infinity());
   impl_->index.radiusSearch(query.data(), r2, found, nanoflann::SearchParams(32, 0.0f, true));
   out.reserve(found.size());
-  for (const auto& [index, d2] : found) out.push_back({impl_->id(index), d2});
+  for (const auto& [index, d2] : found) out.push_back({index, d2});
 }
 
 std::optional<Neighbor> KdTree::nearest_along(const Vec3& query, const std::vector<Vec3>& normals,
@@ -236,23 +208,19 @@ std::optional<Neighbor> KdTree::nearest_along(const Vec3& query, const std::vect
   const double bound = max_distance == std::numeric_limits<double>::infinity()
                            ? std::numeric_limits<double>::infinity()
                            : max_distance * max_distance;
-  NearestAlong result(bound, normals, impl_->ids, direction, max_rank, min_dot);
+  NearestAlong result(bound, normals, direction, max_rank, min_dot);
   impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
   if (!result.found()) return std::nullopt;
-  Neighbor n = result.neighbor();
-  n.index = impl_->id(n.index);
-  return n;
+  return result.neighbor();
 }
 
 std::size_t KdTree::knn_along(const Vec3& query, const std::vector<Vec3>& normals,
                               const Vec3& direction, std::size_t k, std::uint32_t* indices,
                               double* squared_distances) const {
   if (empty() || k == 0 || normals.size() != size()) return 0;
-  KnnAlong result(k, indices, squared_distances, normals, impl_->ids, direction);
+  KnnAlong result(k, indices, squared_distances, normals, direction);
   impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
-  const std::size_t found = result.size();
-  for (std::size_t i = 0; i < found; ++i) indices[i] = impl_->id(indices[i]);
-  return found;
+  return result.size();
 }
 
 // ---- WeightedKdTree: (p, sqrt(w)) in 4-D --------------------------------------------------
