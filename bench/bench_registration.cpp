@@ -124,7 +124,8 @@ void BM_DatumAlignment1MScan(benchmark::State& state) {
     std::uniform_real_distribution<double> ux(0.0, 100.0), uy(0.0, 60.0);
     const Vec3 a(20, 30, 0), b(80, 30, 0);
     for (int i = 0; i < 1'000'000; ++i) {
-      const Vec3 q(ux(rng), uy(rng), 0.0);
+      const double x = ux(rng);  // sequenced: a call's arguments run in no set order
+      const Vec3 q(x, uy(rng), 0.0);
       if ((q - a).norm() < 4.0 || (q - b).norm() < 3.0) continue;
       points.push_back(q);
       normals.push_back(Vec3::UnitZ());
