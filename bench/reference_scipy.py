@@ -8,6 +8,12 @@ difference (must be <= 1e-9), both times of both and the ratios. scipy's times e
 the matrix (shown in brackets). Exit status 1 if any cost differs.
 
     /usr/bin/python3 bench/reference_scipy.py build/bench/bench_matching
+
+With --solve, the whole-command counterpart of `springscan match --model A --scan B --out C`
+(bench/bench_cli_match.cpp times both as processes): reads two point files (x y z a line),
+pairs them by linear_sum_assignment on the squared distances and writes C in the same CSV.
+
+    /usr/bin/python3 bench/reference_scipy.py --solve A B C
 """
 import os
 import subprocess
@@ -32,7 +38,21 @@ def median_seconds(fn, repeats):
     return sorted(wall)[len(wall) // 2], sorted(cpu)[len(cpu) // 2], result
 
 
+def solve(model_path, scan_path, out_path):
+    """One run of what `springscan match` does, as a script: read, pair, write pairs.csv."""
+    model = np.loadtxt(model_path)
+    scan = np.loadtxt(scan_path)
+    cost = cdist(model, scan, "sqeuclidean")
+    rows, cols = linear_sum_assignment(cost)
+    with open(out_path, "w") as out:
+        out.write("model_index,scan_index,squared_distance_mm2\n")
+        out.writelines(f"{r},{c},{cost[r, c]:.17g}\n" for r, c in zip(rows, cols))
+
+
 def main():
+    if len(sys.argv) == 5 and sys.argv[1] == "--solve":
+        solve(*sys.argv[2:])
+        return
     if len(sys.argv) != 2:
         sys.exit(__doc__)
     bench = sys.argv[1]

@@ -1,4 +1,9 @@
-// springscan: the command-line front of the inspection station (DESIGN.md).
+// springscan: the command-line front of the inspection station (DESIGN.md). This program runs
+// the light commands itself and execs springscan-commands for the rest (cli/commands.hpp says
+// why: a command pays at start-up for every shared library its program links).
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -7,35 +12,21 @@
 #include "cli/commands.hpp"
 
 namespace springscan::cli {
-
-// One line per subcommand; the implementations live in cmd_<name>.cpp.
-int version_main(int argc, char** argv);
-int match_main(int argc, char** argv);
-int report_main(int argc, char** argv);
-int scan_main(int argc, char** argv);
-int convert_main(int argc, char** argv);
-int analyze_main(int argc, char** argv);
-int model_main(int argc, char** argv);
-int trend_main(int argc, char** argv);
-int msa_main(int argc, char** argv);
-int calibrate_main(int argc, char** argv);
-int compensate_main(int argc, char** argv);
-
 namespace {
 
 const Command kCommands[] = {
     {"version", "print the version", version_main},
-    {"analyze", "fit a scan to its part and measure the deviation (report files)", analyze_main},
+    {"analyze", "fit a scan to its part and measure the deviation (report files)", nullptr},
     {"match", "pair model and scan points by exact min-cost matching", match_main},
-    {"model", "show a CAD file's faces, flanges and bends (text or JSON)", model_main},
-    {"report", "render the HTML report again from a saved report.pb", report_main},
-    {"scan", "acquire one scan from the configured USB scanner", scan_main},
-    {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", convert_main},
-    {"trend", "control charts, Cp/Cpk and run rules over many reports (HTML)", trend_main},
-    {"msa", "gauge capability studies, type 1 (Cg, Cgk) and type 3 (%GRR, ndc)", msa_main},
-    {"calibrate", "fit each scanner head's transform to the calibration artefact", calibrate_main},
+    {"model", "show a CAD file's faces, flanges and bends (text or JSON)", nullptr},
+    {"report", "render the HTML report again from a saved report.pb", nullptr},
+    {"scan", "acquire one scan from the configured USB scanner", nullptr},
+    {"convert", "convert a scan or mesh between PLY, XYZ/CSV and STL", nullptr},
+    {"trend", "control charts, Cp/Cpk and run rules over many reports (HTML)", nullptr},
+    {"msa", "gauge capability studies, type 1 (Cg, Cgk) and type 3 (%GRR, ndc)", nullptr},
+    {"calibrate", "fit each scanner head's transform to the calibration artefact", nullptr},
     {"compensate", "the compensated die surface as STEP, from a report's deformation field",
-     compensate_main},
+     nullptr},
 };
 
 void print_usage() {
@@ -46,6 +37,28 @@ void print_usage() {
     name.resize(12, ' ');
     std::cout << "  " << name << command.summary << '\n';
   }
+}
+
+// springscan-commands beside this program's own file (/proc/self/exe: the real file, whatever
+// path or symlink it was started by), so the build tree and an install both work.
+std::string commands_program() {
+  char self[4096];
+  const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+  if (n <= 0) return kCommandsProgram;
+  std::string path(self, static_cast<std::size_t>(n));
+  path.resize(path.rfind('/') + 1);
+  return path + kCommandsProgram;
+}
+
+// Replaces this process with springscan-commands, same argv; returns only when that fails.
+int run_in_commands_program(const char* command, char** argv) {
+  const std::string program = commands_program();
+  execv(program.c_str(), argv);
+  const int error = errno;
+  return fail_with(command,
+                   "cannot run " + program + ": " + std::strerror(error) +
+                       " (springscan is not installed completely)",
+                   kExitAnalysisFailed);
 }
 
 }  // namespace
@@ -65,7 +78,9 @@ int main(int argc, char** argv) {
   }
   if (std::strcmp(argv[1], "--version") == 0) return version_main(argc, argv);
   for (const auto& command : kCommands) {
-    if (std::strcmp(argv[1], command.name) == 0) return command.run(argc, argv);
+    if (std::strcmp(argv[1], command.name) != 0) continue;
+    return command.run != nullptr ? command.run(argc, argv)
+                                  : run_in_commands_program(command.name, argv);
   }
   std::cerr << "springscan: unknown command '" << argv[1] << "' (springscan --help lists them)\n";
   return kExitUsage;
