@@ -1,4 +1,4 @@
-# What a plant installs (scripts/package.sh builds it as a .deb with CPack): the two programs,
+# What a plant installs (scripts/package.sh builds it as a .deb with CPack): the programs,
 # the systemd unit, the udev rule, the commented default config, the demo part it names, and
 # the documentation. With CMAKE_INSTALL_PREFIX=/usr (the package), the config goes to /etc and
 # the unit and the rule to /lib as Debian 12 packages ship them; with another prefix (a local
@@ -16,6 +16,9 @@ set(SPRINGSCAN_UDEV_RULES_DIR "${_springscan_lib_root}/udev/rules.d" CACHE STRIN
     "Where the udev rule is installed")
 
 install(TARGETS springscand springscan RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+# springscan execs it from ../lib/springscan/ relative to itself (cli/commands.hpp): a private
+# program, where Debian puts them (/usr/lib/<package>), not on PATH.
+install(TARGETS springscan-commands RUNTIME DESTINATION lib/springscan)
 install(FILES config/springscand.textproto
         DESTINATION ${CMAKE_INSTALL_FULL_SYSCONFDIR}/springscan)
 install(FILES config/springscand.service DESTINATION ${SPRINGSCAN_SYSTEMD_UNIT_DIR})
