@@ -1,5 +1,5 @@
-// `springscan match` as a user runs it (docs/performance.md "Matching", issue 32): fork/exec of
-// the real command on point files written once, against the same pairing by
+// `springscan match` as a user runs it (docs/performance.md "The whole command", issue 32):
+// fork/exec of the real command on point files written once, against the same pairing by
 // scipy.optimize.linear_sum_assignment as a whole Python script (bench/reference_scipy.py
 // --solve), in the same run. The whole command is timed: program load, reading both files, the
 // matching and writing pairs.csv. Budget: scipy / springscan >= 25 at n = 8,192.

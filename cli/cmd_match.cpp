@@ -147,7 +147,8 @@ int match_main(int argc, char** argv) {
       !written) {
     return fail_with(kName, written.message(), kExitAnalysisFailed);
   }
-  // Where a whole command's time goes besides the matching (docs/performance.md "Matching").
+  // Where a whole command's time goes besides the matching (docs/performance.md "The whole
+  // command").
   char timings[128];
   std::snprintf(timings, sizeof timings, "read %.1f ms, write %.1f ms", read_ms,
                 ms_since(write_start));
