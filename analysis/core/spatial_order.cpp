@@ -78,6 +78,32 @@ bool radix_pass(const std::vector<Keyed>& from, std::vector<Keyed>& to, int shif
   return true;
 }
 
+// to[k] = from[order[k]] (gather) or to[order[k]] = from[k] (scatter), for one attribute.
+template <typename T>
+std::vector<T> permute(const std::vector<T>& from, const std::vector<std::uint32_t>& order,
+                       bool gather, int threads) {
+  if (from.empty()) return {};
+  std::vector<T> to(from.size());
+  parallel_blocks(from.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    if (gather)
+      for (std::size_t k = begin; k < end; ++k) to[k] = from[order[k]];
+    else
+      for (std::size_t k = begin; k < end; ++k) to[order[k]] = from[k];
+  });
+  return to;
+}
+
+PointCloud permuted(const PointCloud& cloud, const std::vector<std::uint32_t>& order, bool gather,
+                    int threads) {
+  PointCloud out;
+  out.points = permute(cloud.points, order, gather, threads);
+  out.normals = permute(cloud.normals, order, gather, threads);
+  out.scalars = permute(cloud.scalars, order, gather, threads);
+  out.colors = permute(cloud.colors, order, gather, threads);
+  out.face_ids = permute(cloud.face_ids, order, gather, threads);
+  return out;
+}
+
 }  // namespace
 
 std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
@@ -123,6 +149,15 @@ bool spatially_coherent(const std::vector<Vec3>& points) {
   const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
   std::nth_element(steps.begin(), mid, steps.end());
   return *mid <= kCoherentShare * (hi - lo).norm();
+}
+
+PointCloud gathered(const PointCloud& cloud, const std::vector<std::uint32_t>& order, int threads) {
+  return permuted(cloud, order, true, threads);
+}
+
+PointCloud scattered(const PointCloud& cloud, const std::vector<std::uint32_t>& order,
+                     int threads) {
+  return permuted(cloud, order, false, threads);
 }
 
 std::vector<std::uint32_t> search_order(const std::vector<Vec3>& points, int threads) {

@@ -9,6 +9,7 @@
 
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/spatial_order.hpp"
 #include "analysis/deviation/deviation.hpp"
 #include "analysis/inspection/verdict.hpp"
 #include "analysis/matching/compensation.hpp"
@@ -436,18 +437,27 @@ void start_report(const PipelineSettings& config, const v1::AnalysisSettings& se
 
 // Some 70 lines on purpose: the stages in the paper's order, each a call, its report section
 // and its time; split, the data flow from one stage to the next would no longer read in one place.
-Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
+Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& given,
                                            const v1::AnalysisSettings& settings) {
   const auto start = Clock::now();
   auto config = load_settings(settings);
   if (!config) return config.error();
   InspectionOutcome out;
   v1::InspectionReport& report = out.report;
-  start_report(*config, settings, model, scan, report);
-  if (auto error = check_inputs(model, scan, report)) return *error;
+  start_report(*config, settings, model, given, report);
+  if (auto error = check_inputs(model, given, report)) return *error;
   auto& timings = *report.mutable_timings_ms();
 
   auto t = Clock::now();
+  // 2c. A scan in no spatial order (a file's, a merged multi-head scan's) is put in space order
+  // once, so that every stage's searches cost what they cost on a scanner's lines (issue 37,
+  // core/spatial_order.hpp); deviation.ply goes back to the scan's order. Timed with the reduce.
+  const std::vector<std::uint32_t> order = spatially_coherent(given.points)
+                                               ? std::vector<std::uint32_t>{}
+                                               : spatial_order(given.points, config->threads);
+  const PointCloud reordered =
+      order.empty() ? PointCloud{} : gathered(given, order, config->threads);
+  const PointCloud& scan = order.empty() ? given : reordered;
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);
   if (!reduced) return reduced.error();
@@ -568,6 +578,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                                           "; the results are in the best-fit frame");
   }
 
+  if (!order.empty()) out.deviation_cloud = scattered(out.deviation_cloud, order, config->threads);
   timings.set_total(ms_since(start));
   return out;
 }
