@@ -35,10 +35,21 @@ PointCloud drop_sparse_voxels(const VoxelResult& voxels, double fill, std::size_
 
 std::pair<Vec3, Vec3> bounding_box(const std::vector<Vec3>& points) {
   if (points.empty()) return {Vec3::Zero(), Vec3::Zero()};
-  Vec3 lo = points[0], hi = points[0];
-  for (const auto& p : points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
+  // Block partials on all cores: min and max are exact in any order (a 1M scan's box is taken
+  // by several stages).
+  std::vector<std::pair<Vec3, Vec3>> partial(block_count(points.size()));
+  parallel_blocks(points.size(), 0, [&](std::size_t b, std::size_t begin, std::size_t end) {
+    Vec3 lo = points[begin], hi = points[begin];
+    for (std::size_t i = begin + 1; i < end; ++i) {
+      lo = lo.cwiseMin(points[i]);
+      hi = hi.cwiseMax(points[i]);
+    }
+    partial[b] = {lo, hi};
+  });
+  Vec3 lo = partial.front().first, hi = partial.front().second;
+  for (const auto& [l, h] : partial) {
+    lo = lo.cwiseMin(l);
+    hi = hi.cwiseMax(h);
   }
   return {lo, hi};
 }

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "analysis/core/parallel.hpp"
+#include "analysis/preprocess/reduction.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -73,32 +74,39 @@ Expected<VoxelResult> voxel_reduce(const PointCloud& cloud, const VoxelSettings&
   if (!all_finite(cloud.points)) return fail("voxel: input has non-finite (NaN/inf) coordinates");
   VoxelResult result;
   if (cloud.empty()) return result;
-  Vec3 lo = cloud.points[0];
-  Vec3 hi = lo;
-  for (const auto& p : cloud.points) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
+  const auto [lo, hi] = bounding_box(cloud.points);
   const double inv = 1.0 / settings.voxel_size_mm;
   if (((hi - lo) * inv).maxCoeff() >= static_cast<double>(kAxisCells - 1))
     return fail("voxel: voxel_size_mm " + std::to_string(settings.voxel_size_mm) +
                 " is too small for a cloud spanning " + std::to_string((hi - lo).maxCoeff()) +
                 " mm");
+  // Each point's voxel key on all cores (p - lo >= 0, so truncation is floor, and inline); the
+  // table and the sums stay one pass in point order, so that every voxel's sum is taken in the
+  // same order as before and its centroid does not change in the last bit.
+  std::vector<std::uint64_t> keys(cloud.size());
+  parallel_blocks(cloud.size(), 0, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const Vec3 cell = (cloud.points[i] - lo) * inv;
+      keys[i] = static_cast<std::uint64_t>(cell.x()) |
+                (static_cast<std::uint64_t>(cell.y()) << 21) |
+                (static_cast<std::uint64_t>(cell.z()) << 42);
+    }
+  });
   const bool normals = cloud.has_normals() && cloud.normals.size() == cloud.size();
   VoxelTable table;
   std::vector<Vec3> sums, normal_sums;
+  std::uint64_t last_key = ~std::uint64_t{0};  // a scan in any spatial order repeats its voxel
+  std::uint32_t slot = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Vec3 cell = ((cloud.points[i] - lo) * inv).array().floor();
-    const auto key = static_cast<std::uint64_t>(cell.x()) |
-                     (static_cast<std::uint64_t>(cell.y()) << 21) |
-                     (static_cast<std::uint64_t>(cell.z()) << 42);
-    bool inserted = false;
-    const std::uint32_t slot =
-        table.find_or_insert(key, static_cast<std::uint32_t>(sums.size()), inserted);
-    if (inserted) {
-      sums.push_back(Vec3::Zero());
-      result.counts.push_back(0);
-      if (normals) normal_sums.push_back(Vec3::Zero());
+    if (keys[i] != last_key) {
+      bool inserted = false;
+      slot = table.find_or_insert(keys[i], static_cast<std::uint32_t>(sums.size()), inserted);
+      last_key = keys[i];
+      if (inserted) {
+        sums.push_back(Vec3::Zero());
+        result.counts.push_back(0);
+        if (normals) normal_sums.push_back(Vec3::Zero());
+      }
     }
     sums[slot] += cloud.points[i];
     ++result.counts[slot];
