@@ -78,29 +78,34 @@ bool radix_pass(const std::vector<Keyed>& from, std::vector<Keyed>& to, int shif
   return true;
 }
 
-// to[k] = from[order[k]] (gather) or to[order[k]] = from[k] (scatter), for one attribute.
+// to[k] = from[order[k]] (gather) or to[order[k]] = from[k] (scatter), for one attribute and
+// one block of k; `to` sized by the caller (empty when `from` is).
 template <typename T>
-std::vector<T> permute(const std::vector<T>& from, const std::vector<std::uint32_t>& order,
-                       bool gather, int threads) {
-  if (from.empty()) return {};
-  std::vector<T> to(from.size());
-  parallel_blocks(from.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    if (gather)
-      for (std::size_t k = begin; k < end; ++k) to[k] = from[order[k]];
-    else
-      for (std::size_t k = begin; k < end; ++k) to[order[k]] = from[k];
-  });
-  return to;
+void permute(const std::vector<T>& from, const std::vector<std::uint32_t>& order, bool gather,
+             std::size_t begin, std::size_t end, std::vector<T>& to) {
+  if (from.empty()) return;
+  if (gather)
+    for (std::size_t k = begin; k < end; ++k) to[k] = from[order[k]];
+  else
+    for (std::size_t k = begin; k < end; ++k) to[order[k]] = from[k];
 }
 
+// Every attribute in one parallel pass (one thread start, not one per attribute).
 PointCloud permuted(const PointCloud& cloud, const std::vector<std::uint32_t>& order, bool gather,
                     int threads) {
   PointCloud out;
-  out.points = permute(cloud.points, order, gather, threads);
-  out.normals = permute(cloud.normals, order, gather, threads);
-  out.scalars = permute(cloud.scalars, order, gather, threads);
-  out.colors = permute(cloud.colors, order, gather, threads);
-  out.face_ids = permute(cloud.face_ids, order, gather, threads);
+  out.points.resize(cloud.points.size());
+  out.normals.resize(cloud.normals.size());
+  out.scalars.resize(cloud.scalars.size());
+  out.colors.resize(cloud.colors.size());
+  out.face_ids.resize(cloud.face_ids.size());
+  parallel_blocks(cloud.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    permute(cloud.points, order, gather, begin, end, out.points);
+    permute(cloud.normals, order, gather, begin, end, out.normals);
+    permute(cloud.scalars, order, gather, begin, end, out.scalars);
+    permute(cloud.colors, order, gather, begin, end, out.colors);
+    permute(cloud.face_ids, order, gather, begin, end, out.face_ids);
+  });
   return out;
 }
 

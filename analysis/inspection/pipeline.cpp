@@ -142,9 +142,9 @@ std::optional<Error> check_inputs(const PartModel& model, const PointCloud& scan
   return std::nullopt;
 }
 
-// The scan in the CAD frame (core transformed(), on `threads` threads: a 1M-point scan).
-PointCloud scan_in_frame(const PointCloud& scan, const Transform& T, int threads) {
-  PointCloud out = scan;
+// The scan in the CAD frame (core transformed(), on `threads` threads: a 1M-point scan), in
+// the buffers of `out` (a reordered scan's, which nothing needs after).
+PointCloud scan_in_frame(PointCloud out, const Transform& T, int threads) {
   const Mat3 R = T.linear();
   const bool normals = out.normals.size() == out.size();
   parallel_blocks(out.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
@@ -455,8 +455,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   const std::vector<std::uint32_t> order = spatially_coherent(given.points)
                                                ? std::vector<std::uint32_t>{}
                                                : spatial_order(given.points, config->threads);
-  const PointCloud reordered =
-      order.empty() ? PointCloud{} : gathered(given, order, config->threads);
+  PointCloud reordered = order.empty() ? PointCloud{} : gathered(given, order, config->threads);
   const PointCloud& scan = order.empty() ? given : reordered;
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);
@@ -525,7 +524,9 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 5. Deviation: signed distance of every scan point to the model (DESIGN.md stage 5).
-  PointCloud scan_in_cad = scan_in_frame(scan, *T_cad_scan, config->threads);
+  // `scan` is not read after this: a reordered scan's buffers become the CAD-frame copy's.
+  PointCloud scan_in_cad = scan_in_frame(order.empty() ? PointCloud(given) : std::move(reordered),
+                                         *T_cad_scan, config->threads);
   auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
   if (!deviation) return deviation.error();
   // deviation.ply's colour scale: the setting, else the surface tolerance it is judged by.
