@@ -78,37 +78,6 @@ bool radix_pass(const std::vector<Keyed>& from, std::vector<Keyed>& to, int shif
   return true;
 }
 
-// to[k] = from[order[k]] (gather) or to[order[k]] = from[k] (scatter), for one attribute and
-// one block of k; `to` sized by the caller (empty when `from` is).
-template <typename T>
-void permute(const std::vector<T>& from, const std::vector<std::uint32_t>& order, bool gather,
-             std::size_t begin, std::size_t end, std::vector<T>& to) {
-  if (from.empty()) return;
-  if (gather)
-    for (std::size_t k = begin; k < end; ++k) to[k] = from[order[k]];
-  else
-    for (std::size_t k = begin; k < end; ++k) to[order[k]] = from[k];
-}
-
-// Every attribute in one parallel pass (one thread start, not one per attribute).
-PointCloud permuted(const PointCloud& cloud, const std::vector<std::uint32_t>& order, bool gather,
-                    int threads) {
-  PointCloud out;
-  out.points.resize(cloud.points.size());
-  out.normals.resize(cloud.normals.size());
-  out.scalars.resize(cloud.scalars.size());
-  out.colors.resize(cloud.colors.size());
-  out.face_ids.resize(cloud.face_ids.size());
-  parallel_blocks(cloud.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-    permute(cloud.points, order, gather, begin, end, out.points);
-    permute(cloud.normals, order, gather, begin, end, out.normals);
-    permute(cloud.scalars, order, gather, begin, end, out.scalars);
-    permute(cloud.colors, order, gather, begin, end, out.colors);
-    permute(cloud.face_ids, order, gather, begin, end, out.face_ids);
-  });
-  return out;
-}
-
 }  // namespace
 
 std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
@@ -154,15 +123,6 @@ bool spatially_coherent(const std::vector<Vec3>& points) {
   const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
   std::nth_element(steps.begin(), mid, steps.end());
   return *mid <= kCoherentShare * (hi - lo).norm();
-}
-
-PointCloud gathered(const PointCloud& cloud, const std::vector<std::uint32_t>& order, int threads) {
-  return permuted(cloud, order, true, threads);
-}
-
-PointCloud scattered(const PointCloud& cloud, const std::vector<std::uint32_t>& order,
-                     int threads) {
-  return permuted(cloud, order, false, threads);
 }
 
 std::vector<std::uint32_t> search_order(const std::vector<Vec3>& points, int threads) {

@@ -39,13 +39,4 @@ bool spatially_coherent(const std::vector<Vec3>& points);
 /// coherent already, spatial_order otherwise.
 std::vector<std::uint32_t> search_order(const std::vector<Vec3>& points, int threads = 0);
 
-/// `cloud` with its k-th point, and that point's attributes, taken from slot order[k]: select()
-/// on `threads` threads, for a whole scan. `order` is a permutation of [0, cloud.size()).
-PointCloud gathered(const PointCloud& cloud, const std::vector<std::uint32_t>& order,
-                    int threads = 0);
-
-/// The inverse of gathered: `cloud`'s k-th point, and its attributes, to slot order[k].
-PointCloud scattered(const PointCloud& cloud, const std::vector<std::uint32_t>& order,
-                     int threads = 0);
-
 }  // namespace springscan::analysis

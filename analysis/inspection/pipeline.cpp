@@ -9,7 +9,6 @@
 
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
-#include "analysis/core/spatial_order.hpp"
 #include "analysis/deviation/deviation.hpp"
 #include "analysis/inspection/verdict.hpp"
 #include "analysis/matching/compensation.hpp"
@@ -142,9 +141,9 @@ std::optional<Error> check_inputs(const PartModel& model, const PointCloud& scan
   return std::nullopt;
 }
 
-// The scan in the CAD frame (core transformed(), on `threads` threads: a 1M-point scan), in
-// the buffers of `out` (a reordered scan's, which nothing needs after).
-PointCloud scan_in_frame(PointCloud out, const Transform& T, int threads) {
+// The scan in the CAD frame (core transformed(), on `threads` threads: a 1M-point scan).
+PointCloud scan_in_frame(const PointCloud& scan, const Transform& T, int threads) {
+  PointCloud out = scan;
   const Mat3 R = T.linear();
   const bool normals = out.normals.size() == out.size();
   parallel_blocks(out.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
@@ -437,26 +436,18 @@ void start_report(const PipelineSettings& config, const v1::AnalysisSettings& se
 
 // Some 70 lines on purpose: the stages in the paper's order, each a call, its report section
 // and its time; split, the data flow from one stage to the next would no longer read in one place.
-Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& given,
+Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
                                            const v1::AnalysisSettings& settings) {
   const auto start = Clock::now();
   auto config = load_settings(settings);
   if (!config) return config.error();
   InspectionOutcome out;
   v1::InspectionReport& report = out.report;
-  start_report(*config, settings, model, given, report);
-  if (auto error = check_inputs(model, given, report)) return *error;
+  start_report(*config, settings, model, scan, report);
+  if (auto error = check_inputs(model, scan, report)) return *error;
   auto& timings = *report.mutable_timings_ms();
 
   auto t = Clock::now();
-  // 2c. A scan in no spatial order (a file's, a merged multi-head scan's) is put in space order
-  // once, so that every stage's searches cost what they cost on a scanner's lines (issue 37,
-  // core/spatial_order.hpp); deviation.ply goes back to the scan's order. Timed with the reduce.
-  const std::vector<std::uint32_t> order = spatially_coherent(given.points)
-                                               ? std::vector<std::uint32_t>{}
-                                               : spatial_order(given.points, config->threads);
-  PointCloud reordered = order.empty() ? PointCloud{} : gathered(given, order, config->threads);
-  const PointCloud& scan = order.empty() ? given : reordered;
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);
   if (!reduced) return reduced.error();
@@ -524,9 +515,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 5. Deviation: signed distance of every scan point to the model (DESIGN.md stage 5).
-  // `scan` is not read after this: a reordered scan's buffers become the CAD-frame copy's.
-  PointCloud scan_in_cad = scan_in_frame(order.empty() ? PointCloud(given) : std::move(reordered),
-                                         *T_cad_scan, config->threads);
+  PointCloud scan_in_cad = scan_in_frame(scan, *T_cad_scan, config->threads);
   auto deviation = signed_deviation(scan_in_cad.points, model, model_tree, config->deviation);
   if (!deviation) return deviation.error();
   // deviation.ply's colour scale: the setting, else the surface tolerance it is judged by.
@@ -579,7 +568,6 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                                           "; the results are in the best-fit frame");
   }
 
-  if (!order.empty()) out.deviation_cloud = scattered(out.deviation_cloud, order, config->threads);
   timings.set_total(ms_since(start));
   return out;
 }

@@ -103,32 +103,5 @@ TEST(SpatialOrder, CoherenceOfScanLinesAndOfAShuffle) {
   EXPECT_TRUE(spatially_coherent({Vec3(1, 2, 3)}));
 }
 
-// gathered takes every attribute with its point (select's result, on any thread count);
-// scattered undoes it exactly.
-TEST(SpatialOrder, GatheredAndScatteredCarryEveryAttribute) {
-  PointCloud cloud;
-  cloud.points = shuffled_sheet(20'000, 5);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    cloud.normals.push_back(Vec3(double(i), 1.0, 0.0).normalized());
-    cloud.scalars.push_back(0.5 * double(i));
-    cloud.colors.push_back({std::uint8_t(i), std::uint8_t(i >> 8), std::uint8_t(i >> 16)});
-  }
-  const std::vector<std::uint32_t> order = spatial_order(cloud.points);
-  const PointCloud expected = select(cloud, order);
-  for (const int threads : {1, 2}) {
-    const PointCloud g = gathered(cloud, order, threads);
-    EXPECT_EQ(g.points, expected.points);
-    EXPECT_EQ(g.normals, expected.normals);
-    EXPECT_EQ(g.scalars, expected.scalars);
-    EXPECT_EQ(g.colors, expected.colors);
-    EXPECT_TRUE(g.face_ids.empty());
-    const PointCloud back = scattered(g, order, threads);
-    EXPECT_EQ(back.points, cloud.points);
-    EXPECT_EQ(back.normals, cloud.normals);
-    EXPECT_EQ(back.scalars, cloud.scalars);
-    EXPECT_EQ(back.colors, cloud.colors);
-  }
-}
-
 }  // namespace
 }  // namespace springscan::analysis
