@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+
 #include "tests/analysis/synthetic.hpp"
 
 namespace springscan::analysis {
@@ -33,6 +38,62 @@ TEST(Voxel, OnePointPerVoxelAndDeterministic) {
   EXPECT_EQ(total, part.size());
   // Each centroid stays within its voxel's diagonal of the surface points.
   EXPECT_LT(a->cloud.size(), 120u * 70u / 4u * 2u);
+}
+
+// The reference: floor keys, a map from key to first-seen slot, sums in point order. The
+// parallel keys and the repeated-voxel shortcut must give the same centroids to the last bit, in
+// a shuffled order and in a sorted one (where consecutive points share voxels).
+TEST(Voxel, SameBitsAsASerialFloorPass) {
+  PointCloud part = testing::bumpy_surface(60000, 5);
+  const auto reference = [](const PointCloud& c, double size) {
+    Vec3 lo = c.points[0];
+    for (const Vec3& p : c.points) lo = lo.cwiseMin(p);
+    const double inv = 1.0 / size;
+    std::map<std::array<long, 3>, std::size_t> slot;
+    std::vector<Vec3> sums, normal_sums;
+    std::vector<std::uint32_t> counts;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      const Vec3 cell = ((c.points[i] - lo) * inv).array().floor();
+      const std::array<long, 3> key{long(cell.x()), long(cell.y()), long(cell.z())};
+      auto [it, fresh] = slot.emplace(key, sums.size());
+      if (fresh) {
+        sums.push_back(Vec3::Zero());
+        normal_sums.push_back(Vec3::Zero());
+        counts.push_back(0);
+      }
+      sums[it->second] += c.points[i];
+      normal_sums[it->second] += c.normals[i];
+      ++counts[it->second];
+    }
+    PointCloud out;
+    for (std::size_t k = 0; k < sums.size(); ++k) {
+      out.points.push_back(sums[k] / double(counts[k]));
+      out.normals.push_back(normal_sums[k].normalized());
+    }
+    return std::make_pair(out, counts);
+  };
+  for (const bool sorted : {false, true}) {
+    if (sorted) {  // points and normals together, by x
+      std::vector<std::size_t> by_x(part.size());
+      for (std::size_t i = 0; i < by_x.size(); ++i) by_x[i] = i;
+      std::sort(by_x.begin(), by_x.end(), [&](std::size_t a, std::size_t b) {
+        return part.points[a].x() < part.points[b].x();
+      });
+      PointCloud s;
+      for (const std::size_t i : by_x) {
+        s.points.push_back(part.points[i]);
+        s.normals.push_back(part.normals[i]);
+      }
+      part = std::move(s);
+    }
+    const double size = 1.5;  // 1/1.5 is inexact: the keys' products round as the reference's
+    const auto got = voxel_reduce(part, {size});
+    ASSERT_TRUE(got) << got.message();
+    const auto [want, counts] = reference(part, size);
+    EXPECT_EQ(got->counts, counts);
+    EXPECT_EQ(got->cloud.points, want.points);
+    EXPECT_EQ(got->cloud.normals, want.normals);
+  }
 }
 
 TEST(Voxel, BadInputs) {
