@@ -369,9 +369,10 @@ FacingSample facing_fit_points(const PointCloud& scan, const PointCloud& fit_poi
 // Only now: the rival orientations were compared on trimmed fits, where a near-symmetric part's
 // few telling points weigh (untrimmed, the side panel's half turn scored within 0.1 %).
 Expected<BoundaryResult> least_squares_best_fit(
-    const PointCloud& scan, const ReductionOutcome& reduced, const std::vector<Vec3>& fit_normals,
-    const PartModel& model, const KdTree& model_tree, const SurfaceDistance* exact_updates,
-    const FacingSample& exact_points, const PipelineSettings& config, GlobalFitResult& fit) {
+    const PointCloud& scan, const BoundaryScan& boundary_scan, const ReductionOutcome& reduced,
+    const std::vector<Vec3>& fit_normals, const PartModel& model, const KdTree& model_tree,
+    const SurfaceDistance* exact_updates, const FacingSample& exact_points,
+    const PipelineSettings& config, GlobalFitResult& fit) {
   const FacingSample points =
       exact_updates
           ? exact_points
@@ -384,7 +385,7 @@ Expected<BoundaryResult> least_squares_best_fit(
                                    config.global_fit.final_trimmed_fraction, polished))
     return *error;
   fit.icp = std::move(polished);
-  auto pinned = pin_to_boundary(scan.points, fit.icp.T_target_source, model, model_tree,
+  auto pinned = pin_to_boundary(boundary_scan, fit.icp.T_target_source, model, model_tree,
                                 config.global_fit.boundary);
   if (!pinned) return pinned.error();
   fit.T_cad_scan = pinned->T_cad_scan;
@@ -478,21 +479,23 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                                    config->global_fit.icp.trimmed_fraction, fit->icp))
     return *error;
   fit->T_cad_scan = fit->icp.T_target_source;
-  // The part's ends fix what the surface leaves free (registration/boundary.hpp).
-  auto pinned =
-      pin_to_boundary(scan.points, fit->T_cad_scan, model, model_tree, config->global_fit.boundary);
+  // The part's ends fix what the surface leaves free (registration/boundary.hpp); the scan's
+  // samples for it drawn once for the three pins below.
+  const BoundaryScan boundary_scan(scan.points, config->global_fit.boundary);
+  auto pinned = pin_to_boundary(boundary_scan, fit->T_cad_scan, model, model_tree,
+                                config->global_fit.boundary);
   if (!pinned) return pinned.error();
   fit->T_cad_scan = pinned->T_cad_scan;
   // A near-symmetric part's rival orientations compared on converged fits (trimmed alike).
   pinned = settle_orientation(
       {reduced->scan_for_fit.points, *fit_normals, scan.points, exact_points.points,
-       exact_points.normals, model, model_tree, exact_updates},
+       exact_points.normals, model, model_tree, exact_updates, &boundary_scan},
       config->global_fit, *fit, std::move(*pinned));
   if (!pinned) return pinned.error();
   // The pose chosen, its last updates are the paper's best fit: least squares over the whole
   // seen surface, no share trimmed (global_fit.hpp final_trimmed_fraction), then the ends again.
-  pinned = least_squares_best_fit(scan, *reduced, *fit_normals, model, model_tree, exact_updates,
-                                  exact_points, *config, *fit);
+  pinned = least_squares_best_fit(scan, boundary_scan, *reduced, *fit_normals, model, model_tree,
+                                  exact_updates, exact_points, *config, *fit);
   if (!pinned) return pinned.error();
   fit->rms_final_mm =
       rms_nearest_distance(reduced->scan_for_fit.points, fit->T_cad_scan, model_tree,

@@ -140,40 +140,35 @@ Extent model_extent(const PointCloud& model, const Vec3& u, const BoundarySettin
   return extent_of(std::move(values), s);
 }
 
-// Scan points (scan frame) with the order their searches run in (spatial_order).
-struct OrderedScan {
-  std::vector<Vec3> points;
-  std::vector<std::uint32_t> order;
-};
-
 // The scan's extent along u over its points on the surface. With a `window`, only points within
 // it of the model's ends are looked at (the nearest-sample queries are the cost). The queries
 // run on s.threads threads in space order; the ends are taken from the points in their order.
-Extent scan_extent(const OrderedScan& scan, const Transform& T, const KdTree& tree,
+Extent scan_extent(const BoundaryScan& scan, const Transform& T, const KdTree& tree,
                    const std::vector<Vec3>& normals, const Vec3& u, const Extent& model,
                    const BoundarySettings& s, double window) {
   constexpr std::uint8_t kHigh = 1, kLow = 2;
-  std::vector<std::uint8_t> near(scan.points.size(), 0);  // kHigh | kLow, 0: not used
-  std::vector<double> along(scan.points.size());
-  parallel_blocks(
-      scan.points.size(), s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) {
-          const std::uint32_t i = scan.order[k];
-          const Vec3 q = T * scan.points[i];
-          const double v = u.dot(q);
-          const bool near_high = v >= *model.high - window, near_low = v <= *model.low + window;
-          if (!near_high && !near_low) continue;
-          // As on the model's side, points on faces that look along u are left out:
-          // a solid's end face (a wall's outer skin, a sheet's edge) seen at a slant
-          // piles its points up at the end, and the band's mean would place the end
-          // up to a band width too far out.
-          const SurfaceContact c = contact(q, tree, normals);
-          if (c.distance_mm > s.surface_distance_mm || std::abs(c.normal.dot(u)) > kFacingAlong)
-            continue;
-          along[i] = v;
-          near[i] = static_cast<std::uint8_t>((near_high ? kHigh : 0) | (near_low ? kLow : 0));
-        }
-      });
+  const std::vector<Vec3>& points = scan.ordered();
+  const std::vector<std::uint32_t>& index = scan.index();
+  std::vector<std::uint8_t> near(points.size(), 0);  // kHigh | kLow, 0: not used
+  std::vector<double> along(points.size());
+  parallel_blocks(points.size(), s.threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::uint32_t i = index[k];
+      const Vec3 q = T * points[k];
+      const double v = u.dot(q);
+      const bool near_high = v >= *model.high - window, near_low = v <= *model.low + window;
+      if (!near_high && !near_low) continue;
+      // As on the model's side, points on faces that look along u are left out:
+      // a solid's end face (a wall's outer skin, a sheet's edge) seen at a slant
+      // piles its points up at the end, and the band's mean would place the end
+      // up to a band width too far out.
+      const SurfaceContact c = contact(q, tree, normals);
+      if (c.distance_mm > s.surface_distance_mm || std::abs(c.normal.dot(u)) > kFacingAlong)
+        continue;
+      along[i] = v;
+      near[i] = static_cast<std::uint8_t>((near_high ? kHigh : 0) | (near_low ? kLow : 0));
+    }
+  });
   std::vector<double> high, low;
   for (std::size_t i = 0; i < near.size(); ++i) {
     if (near[i] & kHigh) high.push_back(along[i]);
@@ -195,7 +190,7 @@ std::string mm(double v) {
 // Locates both ends of scan and model along u and moves the fit to match them (boundary.hpp
 // step 2), repeated while the shift changes: points past the model's end only count once the
 // fit has brought them onto the surface.
-FreeDirection pin_direction(const OrderedScan& scan, Transform& T, const KdTree& tree,
+FreeDirection pin_direction(const BoundaryScan& scan, Transform& T, const KdTree& tree,
                             const std::vector<Vec3>& normals, const PointCloud& model,
                             const Vec3& u, const BoundarySettings& s) {
   FreeDirection d;
@@ -258,26 +253,64 @@ std::optional<double> high_end(std::vector<double>& values, double band_mm, std:
   return 2.0 * (sum / static_cast<double>(n)) - e0 + band_mm;
 }
 
+BoundaryScan::BoundaryScan(const std::vector<Vec3>& scan, const BoundarySettings& settings)
+    : scan_(&scan),
+      info_points_(settings.info_points),
+      scan_points_(settings.scan_points),
+      threads_(settings.threads),
+      info_(strided_sample(scan, settings.info_points)) {}
+
+bool BoundaryScan::fits(const BoundarySettings& settings) const {
+  return settings.info_points == info_points_ && settings.scan_points == scan_points_ &&
+         settings.threads == threads_;
+}
+
+const std::vector<Vec3>& BoundaryScan::ordered() const {
+  build();
+  return ordered_;
+}
+
+const std::vector<std::uint32_t>& BoundaryScan::index() const {
+  build();
+  return index_;
+}
+
+// The large sample gathered in search order once: the extent's queries then read it in order,
+// not at random over 200,000 points.
+void BoundaryScan::build() const {
+  if (!ordered_.empty() || scan_->empty()) return;
+  const std::vector<Vec3> sample = strided_sample(*scan_, scan_points_);
+  index_ = search_order(sample, threads_);
+  ordered_.resize(sample.size());
+  for (std::size_t k = 0; k < sample.size(); ++k) ordered_[k] = sample[index_[k]];
+}
+
 Expected<BoundaryResult> pin_to_boundary(const std::vector<Vec3>& scan, const Transform& T_cad_scan,
                                          const PartModel& model, const KdTree& model_tree,
                                          const BoundarySettings& settings) {
+  return pin_to_boundary(BoundaryScan(scan, settings), T_cad_scan, model, model_tree, settings);
+}
+
+Expected<BoundaryResult> pin_to_boundary(const BoundaryScan& scan, const Transform& T_cad_scan,
+                                         const PartModel& model, const KdTree& model_tree,
+                                         const BoundarySettings& settings) {
   if (auto error = check(settings)) return *error;
-  if (scan.empty()) return fail("boundary: the scan is empty");
+  if (!scan.fits(settings))
+    return pin_to_boundary(scan.scan(), T_cad_scan, model, model_tree, settings);
+  if (scan.scan().empty()) return fail("boundary: the scan is empty");
   if (model_tree.empty() || model.samples.normals.size() != model_tree.size())
     return fail("boundary: the model has no samples with normals");
   BoundaryResult out;
   out.T_cad_scan = T_cad_scan;
   const std::vector<Vec3>& normals = model.samples.normals;
-  std::vector<Vec3> info_scan = strided_sample(scan, settings.info_points);
+  std::vector<Vec3> info_scan = scan.info();
   for (Vec3& p : info_scan) p = T_cad_scan * p;
   const std::vector<Vec3> free = free_translations(info_scan, model_tree, normals, settings);
   if (free.empty()) return out;
-  OrderedScan sample{strided_sample(scan, settings.scan_points), {}};
-  sample.order = search_order(sample.points, settings.threads);
   const std::shared_ptr<const PointCloud> surface = model_surface(model, settings.model_points);
   for (const Vec3& u : free)
     out.free_directions.push_back(
-        pin_direction(sample, out.T_cad_scan, model_tree, normals, *surface, u, settings));
+        pin_direction(scan, out.T_cad_scan, model_tree, normals, *surface, u, settings));
   return out;
 }
 

@@ -347,8 +347,10 @@ Expected<BoundaryResult> settle_orientation(const OrientationSettleInput& in,
       errors[k] = e->message;
       continue;
     }
-    auto pin = pin_to_boundary(in.scan, icp_fit->T_target_source, in.model, in.model_tree,
-                               settings.boundary);
+    auto pin = in.boundary_scan ? pin_to_boundary(*in.boundary_scan, icp_fit->T_target_source,
+                                                  in.model, in.model_tree, settings.boundary)
+                                : pin_to_boundary(in.scan, icp_fit->T_target_source, in.model,
+                                                  in.model_tree, settings.boundary);
     if (!pin) {
       errors[k] = pin.message();
       continue;

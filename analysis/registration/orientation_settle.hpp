@@ -37,6 +37,8 @@ struct OrientationSettleInput {
   /// The exact distance when the global fit ended with its updates on the exact surface
   /// (finish_best_fit), so that the rivals end alike; null: they did not.
   const SurfaceDistance* exact_updates = nullptr;
+  /// `scan` prepared for the boundary once (the caller's, reused), or null: drawn per rival.
+  const BoundaryScan* boundary_scan = nullptr;
 };
 
 /// Settles `fit`'s orientation (see above). `pinned`: the boundary's result for fit.T_cad_scan.

@@ -2,8 +2,11 @@
 // random, laser-scanned whole in two tilted passes (field_truth.hpp), come back at the pose the
 // test constructed along every direction, the profile's length included, which the surface alone
 // leaves free; a scan of the middle only says that direction is free and how it was fixed.
+#include "analysis/registration/boundary.hpp"
+
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -131,6 +134,41 @@ TEST(BoundaryFit, AWholeScanReportsTheLengthPinnedByTheEnds) {
   centre /= static_cast<double>(cad.model.samples.size());
   const Transform E = testing::from_row_major(fit.transform()) * sc.pose;
   EXPECT_LE(std::abs((E * centre - centre).y()), 0.02);
+}
+
+// A scan prepared once (BoundaryScan, as the pipeline's three pins share it) pins every fit as
+// the scan given anew does, to the last bit: over several fits in turn, and with settings whose
+// sample counts differ from the prepared ones (drawn anew then).
+TEST(BoundaryFit, APreparedScanPinsAsTheScanGivenAnew) {
+  const Profile p = profiles()[1];
+  const auto& cad = testing::field_part(p.name, &p.spec);
+  std::mt19937 rng(5);
+  const Transform T_scan_part = testing::random_motion(rng, 100.0);
+  std::vector<Vec3> scan;
+  for (const Vec3& q : cad.model.samples.points) scan.push_back(T_scan_part * q);
+  std::shuffle(scan.begin(), scan.end(), rng);
+  const KdTree tree(cad.model.samples.points);
+  BoundarySettings settings;
+  settings.scan_points = scan.size() / 3;  // a strided sample, not every point
+  const BoundaryScan prepared(scan, settings);
+  for (const double slide_mm : {0.0, 0.4, -1.3}) {
+    const Transform T = Eigen::Translation3d(0.0, slide_mm, 0.05) * T_scan_part.inverse();
+    for (BoundarySettings s : {settings, BoundarySettings{}}) {
+      const auto fresh = pin_to_boundary(scan, T, cad.model, tree, s);
+      const auto reused = pin_to_boundary(prepared, T, cad.model, tree, s);
+      ASSERT_TRUE(fresh && reused);
+      EXPECT_TRUE(fresh->T_cad_scan.matrix() == reused->T_cad_scan.matrix());
+      ASSERT_EQ(fresh->free_directions.size(), reused->free_directions.size());
+      ASSERT_FALSE(fresh->free_directions.empty());  // the length: the ends were searched
+      for (std::size_t k = 0; k < fresh->free_directions.size(); ++k) {
+        EXPECT_EQ(fresh->free_directions[k].pinned, reused->free_directions[k].pinned);
+        EXPECT_EQ(fresh->free_directions[k].shift_mm, reused->free_directions[k].shift_mm);
+        EXPECT_EQ(fresh->free_directions[k].scan_length_mm,
+                  reused->free_directions[k].scan_length_mm);
+      }
+      EXPECT_TRUE(slide_mm != 0.0 || fresh->free_directions[0].pinned);
+    }
+  }
 }
 
 std::string profile_name(const ::testing::TestParamInfo<int>& param) {
