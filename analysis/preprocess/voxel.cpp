@@ -74,7 +74,8 @@ Expected<VoxelResult> voxel_reduce(const PointCloud& cloud, const VoxelSettings&
   if (!all_finite(cloud.points)) return fail("voxel: input has non-finite (NaN/inf) coordinates");
   VoxelResult result;
   if (cloud.empty()) return result;
-  const auto [lo, hi] = bounding_box(cloud.points);
+  const std::pair<Vec3, Vec3> bounds = bounding_box(cloud.points);  // (clang: no captured bindings)
+  const Vec3 lo = bounds.first, hi = bounds.second;
   const double inv = 1.0 / settings.voxel_size_mm;
   if (((hi - lo) * inv).maxCoeff() >= static_cast<double>(kAxisCells - 1))
     return fail("voxel: voxel_size_mm " + std::to_string(settings.voxel_size_mm) +
