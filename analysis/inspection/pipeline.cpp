@@ -184,6 +184,7 @@ double part_extent_mm(const PointCloud& cloud) {
 std::optional<SpringbackResult> add_bend_table(const PartModel& model,
                                                const PointCloud& scan_in_cad,
                                                const PipelineSettings& settings,
+                                               const FrameUncertainty& frame_u,
                                                v1::InspectionReport& report) {
   if (model.segmentation.flanges.empty()) return std::nullopt;
   auto result = measure_springback(model, scan_in_cad, settings.springback);
@@ -193,7 +194,8 @@ std::optional<SpringbackResult> add_bend_table(const PartModel& model,
   }
   // 7b. The expanded uncertainty of every value it measured (docs/uncertainty.md).
   attach_uncertainty(
-      estimate_uncertainty(*result, part_extent_mm(scan_in_cad), settings.uncertainty), *result);
+      estimate_uncertainty(*result, part_extent_mm(scan_in_cad), settings.uncertainty), *result,
+      &frame_u);
   fill_springback_report(*result, report);
   for (const BendMeasurement& bend : result->bends)
     if (!bend.measured) report.add_warnings(bend.status);
@@ -538,12 +540,20 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
 
   t = Clock::now();
   // 6-7. Local best fits per flange and springback per bend (paper §4, automated).
-  const auto springback = add_bend_table(model, out.deviation_cloud, *config, report);
-  // The surface statistic's U: the flanges' noise (else the fit's residual), and how far a
-  // repeated scan moves the best fit the deviation is defined in.
-  attach_deviation_uncertainty(springback ? part_noise_mm(*springback) : fit_rms_residual_mm,
-                               frame_u.repeat_translation_mm, part_extent_mm(out.deviation_cloud),
-                               config->uncertainty, deviation->statistics);
+  const auto springback = add_bend_table(model, out.deviation_cloud, *config, frame_u, report);
+  // The surface statistic's U: the flanges' noise (else the fit's residual), and how far the
+  // result frame's own U moves the statistic (its sensitivity to the frame, on these points).
+  const auto frame_sigma = [&](double quantile) {
+    return frame_statistic_sigma(frame_u, out.deviation_cloud.points, deviation->signed_distance_mm,
+                                 quantile, model_tree, model.samples.normals);
+  };
+  // The noise: of the distances themselves where the scan's order tells it, else the flanges'.
+  const double noise_mm =
+      std::max(neighbour_noise_mm(out.deviation_cloud.points, deviation->signed_distance_mm),
+               springback ? part_noise_mm(*springback) : fit_rms_residual_mm);
+  attach_deviation_uncertainty(noise_mm, frame_sigma(0.95), frame_sigma(1.0),
+                               part_extent_mm(out.deviation_cloud), config->uncertainty,
+                               deviation->statistics);
   // deviation.uncertainty_mm: the verdict copies the U of the statistic it judged.
   timings.set_local_fits(ms_since(t));
 

@@ -30,6 +30,16 @@ double largest_move(const Mat6& cov, const Vec3& c, const Vec3& lo, const Vec3& 
   return worst;
 }
 
+// The standard uncertainty of a value whose change is g . (rotation, translation): the
+// covariance's part, and the departure's, which moves the frame by about its size in any
+// direction and turns it by that over the points' half-diagonal about any axis.
+double sensitivity_sigma(const FrameUncertainty& frame, const Vec6& g) {
+  const double turn = frame.departure_mm / frame.radius_mm;
+  const double departure2 = frame.departure_mm * frame.departure_mm * g.tail<3>().squaredNorm() +
+                            turn * turn * g.head<3>().squaredNorm();
+  return std::sqrt(std::max(0.0, g.dot(frame.covariance * g) + departure2));
+}
+
 }  // namespace
 
 FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree& tree,
@@ -94,19 +104,15 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   if (!(largest > 0.0)) return out;
   // Determined directions: sigma^2 / eigenvalue; a free one (an extrusion's length) is fixed by
   // the part's ends to about free_direction_mm.
-  Vec6 variance, determined = Vec6::Zero();
+  Vec6 variance;
   for (int k = 0; k < 6; ++k) {
     const double value = eig.eigenvalues()(k);
     const bool fixed = value > 1e-6 * largest;
     variance(k) =
         fixed ? out.sigma_mm * out.sigma_mm / value : st.free_direction_mm * st.free_direction_mm;
-    if (fixed) determined(k) = variance(k);
   }
-  const auto unscaled = [&](const Vec6& v) -> Mat6 {
-    const Mat6 m = eig.eigenvectors() * v.asDiagonal() * eig.eigenvectors().transpose();
-    return scale.cwiseInverse().asDiagonal() * m * scale.cwiseInverse().asDiagonal();
-  };
-  Mat6 cov = unscaled(variance);
+  Mat6 cov = eig.eigenvectors() * variance.asDiagonal() * eig.eigenvectors().transpose();
+  cov = scale.cwiseInverse().asDiagonal() * cov * scale.cwiseInverse().asDiagonal();
   // A translation the surface fixes only weakly (its information below the ends' rule,
   // registration/boundary.hpp free_eigenvalue_ratio) is placed by the part's ends: there the
   // covariance of a few points (a hole's wall, an edge-on wall) does not tell, the ends do.
@@ -123,6 +129,10 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
     const double free2 = st.free_direction_mm * st.free_direction_mm;
     if (along < free2) cov.bottomRightCorner<3, 3>() += (free2 - along) * u * u.transpose();
   }
+  out.covariance = cov;
+  out.center = c;
+  out.departure_mm = departure_mm;
+  out.radius_mm = radius;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> rot(cov.topLeftCorner<3, 3>());
   const double k = st.coverage_factor;
   const double rotation_deg =
@@ -136,10 +146,55 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   const double station_mm = std::hypot(st.calibration_length_mm, thermal);
   out.translation_mm =
       k * std::sqrt(move * move + departure_mm * departure_mm + station_mm * station_mm);
-  // A slide along a free direction leaves the surface where it is: not in a deviation's U.
-  out.repeat_translation_mm =
-      k * std::hypot(largest_move(unscaled(determined), c, lo, hi), station_mm);
   return out;
+}
+
+double frame_statistic_sigma(const FrameUncertainty& frame, const std::vector<Vec3>& points,
+                             const std::vector<double>& d, double quantile, const KdTree& tree,
+                             const std::vector<Vec3>& normals) {
+  if (frame.pairs < 6 || points.empty() || d.size() != points.size() ||
+      normals.size() != tree.size())
+    return 0.0;
+  // The |d| bounds of the ranks next to the quantile: a window of 5 % about a p95 (the quantile
+  // moves as the mean of its neighbours' moves), the top 0.1 % for the largest.
+  const double half = quantile >= 1.0 ? 0.001 : 0.025;
+  std::vector<double> magnitude(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) magnitude[i] = std::abs(d[i]);
+  const auto at = [&](double q) {
+    const auto rank = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) *
+                                               static_cast<double>(magnitude.size() - 1));
+    std::nth_element(magnitude.begin(), magnitude.begin() + static_cast<long>(rank),
+                     magnitude.end());
+    return magnitude[rank];
+  };
+  const double lo = at(quantile - half), hi = at(quantile + half);
+  std::vector<std::size_t> near;
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (std::abs(d[i]) >= lo && std::abs(d[i]) <= hi) near.push_back(i);
+  if (near.empty()) return 0.0;
+  // At most kMaxPoints of them, evenly: the mean's sensitivity, not a sum.
+  constexpr std::size_t kMaxPoints = 2000;
+  const std::size_t stride = std::max<std::size_t>(1, near.size() / kMaxPoints);
+  Vec6 g = Vec6::Zero();
+  double count = 0.0;
+  for (std::size_t k = 0; k < near.size(); k += stride) {
+    const std::size_t i = near[k];
+    const auto nn = tree.nearest(points[i]);
+    if (!nn) continue;
+    const Vec3 n = (d[i] < 0.0 ? -1.0 : 1.0) * normals[nn->index];
+    g.head<3>() += (points[i] - frame.center).cross(n);
+    g.tail<3>() += n;
+    count += 1.0;
+  }
+  if (count == 0.0) return 0.0;
+  return sensitivity_sigma(frame, g / count);
+}
+
+double frame_point_sigma(const FrameUncertainty& frame, const Vec3& point, const Vec3& direction) {
+  if (frame.pairs < 6) return 0.0;
+  Vec6 g;
+  g << (point - frame.center).cross(direction), direction;
+  return sensitivity_sigma(frame, g);
 }
 
 }  // namespace springscan::analysis

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "analysis/uncertainty/fit_covariance.hpp"
+#include "analysis/uncertainty/frame_uncertainty.hpp"
 
 namespace springscan::analysis {
 namespace {
@@ -347,12 +348,15 @@ FlangeBudget flange_budget(const FlangeModel& f, double noise, double extent_mm,
     const double sigma_a = std::sqrt(f.curl.a_variance(std::max(f.curl.sigma_mm, floor_sigma)));
     out.curl_radius_mm = 2.0 * sq(shape.curl_radius_mm) * sigma_a;
   }
-  // A trim edge is the extreme of the points in strips: short of the true edge by up to one
-  // point spacing, plus the noise; spacing from the points' spread (an even rectangle).
+  // A trim edge is the extreme of the points in strips, band / n taken off: within about one
+  // point spacing of the true edge (uniform over +-spacing: spacing / sqrt 3), plus the noise;
+  // spacing from the points' spread (an even rectangle). The result frame's move at the edge
+  // is added per edge (attach_uncertainty).
   const double area = 12.0 * std::sqrt(std::max(0.0, f.plane.scatter.determinant()));
   const double spacing =
       f.plane.points > 0 ? std::sqrt(area / static_cast<double>(f.plane.points)) : 0.0;
-  out.edge_mm = rss({spacing, std::max(noise, floor_sigma), st.calibration_length_mm, thermal_mm});
+  out.edge_mm = rss({spacing / std::sqrt(3.0), std::max(noise, floor_sigma),
+                     st.calibration_length_mm, thermal_mm});
   return out;
 }
 
@@ -429,7 +433,24 @@ UncertaintyResult estimate_uncertainty(const SpringbackResult& sb, double extent
   return out;
 }
 
-void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb) {
+namespace {
+
+// The result frame's largest move at an edge's strips, in plane (outward) or across (standard).
+double edge_frame_sigma(const FrameUncertainty* frame, const EdgeDeviation& e) {
+  if (!frame) return 0.0;
+  const Vec3 across = e.direction.cross(e.outward);
+  double worst = 0.0;
+  for (const Vec3& c : e.cad_edge)
+    worst =
+        std::max({worst, frame_point_sigma(*frame, c, e.outward),
+                  across.norm() > 1e-9 ? frame_point_sigma(*frame, c, across.normalized()) : 0.0});
+  return worst;
+}
+
+}  // namespace
+
+void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb,
+                        const FrameUncertainty* frame) {
   const double k = u.coverage_factor;
   for (std::size_t b = 0; b < sb.bends.size() && b < u.bends.size(); ++b) {
     BendMeasurement& m = sb.bends[b];
@@ -447,7 +468,8 @@ void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb) {
     if (flange.shape.curled)
       flange.shape.curl_radius_uncertainty_mm = k * u.flanges[f].curl_radius_mm;
     for (EdgeDeviation& e : flange.trim_edges)
-      if (e.measured) e.uncertainty_mm = k * u.flanges[f].edge_mm;
+      if (e.measured)
+        e.uncertainty_mm = k * rss({u.flanges[f].edge_mm, edge_frame_sigma(frame, e)});
   }
 }
 
@@ -460,7 +482,25 @@ double part_noise_mm(const SpringbackResult& sb) {
   return rms[(rms.size() - 1) / 2];
 }
 
-void attach_deviation_uncertainty(double noise_mm, double frame_translation_mm,
+double neighbour_noise_mm(const std::vector<Vec3>& points, const std::vector<double>& d,
+                          double neighbour_mm) {
+  if (d.size() != points.size()) return 0.0;
+  // At most about kMaxPairs pairs, evenly through the scan: a scale, not a sum.
+  constexpr std::size_t kMaxPairs = 20000;
+  const std::size_t stride = std::max<std::size_t>(1, points.size() / kMaxPairs);
+  std::vector<double> difference;
+  difference.reserve(std::min(points.size(), 2 * kMaxPairs));
+  const double r2 = neighbour_mm * neighbour_mm;
+  for (std::size_t i = 0; i + 1 < points.size(); i += stride)
+    if ((points[i + 1] - points[i]).squaredNorm() <= r2)
+      difference.push_back(std::abs(d[i + 1] - d[i]));
+  if (difference.size() < 100) return 0.0;
+  const auto mid = difference.begin() + static_cast<long>(difference.size() / 2);
+  std::nth_element(difference.begin(), mid, difference.end());
+  return 1.4826 * *mid / std::sqrt(2.0);
+}
+
+void attach_deviation_uncertainty(double noise_mm, double frame_p95_mm, double frame_max_mm,
                                   double part_extent_mm, const UncertaintySettings& st,
                                   DeviationStatistics& statistics) {
   if (statistics.points == 0) return;
@@ -468,11 +508,14 @@ void attach_deviation_uncertainty(double noise_mm, double frame_translation_mm,
   const double thermal =
       st.expansion_per_k * std::abs(st.temperature_delta_k) * part_extent_mm / std::sqrt(3.0);
   const double noise = std::max(noise_mm, st.scanner_sigma_mm);
-  // p95 of |d| over many points: the noise widens it by about its own sigma; one point (the
-  // largest |d|) carries its noise and, as an extreme, up to ~3 sigmas of it.
-  const double common = rss({frame_translation_mm / k, st.calibration_length_mm, thermal});
-  statistics.p95_uncertainty_mm = k * rss({noise, common});
-  statistics.max_uncertainty_mm = k * rss({1.5 * noise, common});
+  // The noise raises the p95 of |d| by 0 (a surface whose deviation spreads far wider than the
+  // noise) up to 1.96 sigma (a surface on its CAD: the p95 is the noise's), 2.15 sigma with 2 %
+  // outliers above it: uniform over [0, 2.2 sigma]. One point (the largest |d|) carries its
+  // noise and, as an extreme, up to ~3 sigmas of it.
+  constexpr double kP95NoiseFactor = 2.2 / 1.7320508075688772;
+  const double station = rss({st.calibration_length_mm, thermal});
+  statistics.p95_uncertainty_mm = k * rss({kP95NoiseFactor * noise, frame_p95_mm, station});
+  statistics.max_uncertainty_mm = k * rss({1.5 * noise, frame_max_mm, station});
 }
 
 }  // namespace springscan::analysis

@@ -70,19 +70,30 @@ std::optional<Error> validate(const UncertaintySettings& settings);
 UncertaintyResult estimate_uncertainty(const SpringbackResult& springback, double part_extent_mm,
                                        const UncertaintySettings& settings = {});
 
+struct FrameUncertainty;  // frame_uncertainty.hpp
+
 /// Writes the expanded uncertainties (k u) of `u` into the contract fields of `springback`
 /// (BendMeasurement, BendStation, FlangeShape, EdgeDeviation). A value not measured keeps 0.
-void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& springback);
+/// `frame`: the result frame's (its move at each trim edge is part of the edge's U), if known.
+void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& springback,
+                        const FrameUncertainty* frame = nullptr);
 
 /// The part's point noise as the flange fits show it: the lower median of their inliers' rms
 /// distance from their planes (mm; 0 without a measured flange).
 double part_noise_mm(const SpringbackResult& springback);
 
+/// The noise of the signed distances themselves (mm): 1.4826 MAD / sqrt 2 of the differences of
+/// consecutive points (a scanner's points come line by line) that lie within `neighbour_mm` of
+/// each other, where the surface's own deviation barely changes. 0 with fewer than 100 such
+/// pairs (points in no order).
+double neighbour_noise_mm(const std::vector<Vec3>& points, const std::vector<double>& signed_mm,
+                          double neighbour_mm = 0.5);
+
 /// Writes the expanded uncertainties of the deviation statistics: the noise of one point
-/// (`noise_mm`: part_noise_mm, or the global fit's residual), the result frame's translation U
-/// (`frame_translation_mm`, expanded), the calibration length and the expansion over
-/// `part_extent_mm`.
-void attach_deviation_uncertainty(double noise_mm, double frame_translation_mm,
+/// (`noise_mm`: part_noise_mm, or the global fit's residual), the result frame's standard
+/// uncertainty of each statistic (`frame_p95_mm`, `frame_max_mm`: frame_statistic_sigma), the
+/// calibration length and the expansion over `part_extent_mm`.
+void attach_deviation_uncertainty(double noise_mm, double frame_p95_mm, double frame_max_mm,
                                   double part_extent_mm, const UncertaintySettings& settings,
                                   DeviationStatistics& statistics);
 

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "analysis/uncertainty/fit_covariance.hpp"
+#include "analysis/uncertainty/frame_uncertainty.hpp"
 #include "tests/analysis/uncertainty/coverage_study.hpp"
 #include "tests/analysis/under_sanitizer.hpp"
 
@@ -35,6 +36,94 @@ TEST(FitCovariance, PlaneSlopeVarianceIsTheLineFitsFormula) {
   EXPECT_NEAR(plane.slope_variance({1.0, 0.0}, 1.0), 1.0 / sum_s2, 1e-12);
   EXPECT_FALSE(plane_covariance(std::span<const Vec3>(local.data(), 4), {}).ok);  // tiny input
   EXPECT_FALSE(plane_covariance({}, {}).ok);                                      // empty
+}
+
+// The 95th percentile of |d| (nearest rank, as the deviation statistic).
+double p95_of(std::vector<double> d) {
+  for (double& x : d) x = std::abs(x);
+  const auto rank = static_cast<std::size_t>(std::ceil(0.95 * static_cast<double>(d.size()))) - 1;
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(rank), d.end());
+  return d[rank];
+}
+
+// A sprung flange (d = 0.01 x along x in [0, 100], normals +z) next to a flat one at its CAD:
+// the p95 of |d| moves with the frame as the frame's covariance says. Truth: the frame drawn
+// from that covariance many times, every point's distance moved by it, the p95 taken again.
+TEST(FrameStatistic, SigmaIsTheStatisticsMoveUnderTheFramesCovariance) {
+  std::vector<Vec3> points;
+  std::vector<double> d;
+  for (int i = 0; i < 200; ++i)
+    for (int j = 0; j < 20; ++j) {
+      const double x = 0.5 * i, y = 2.0 * j;
+      points.emplace_back(x, y, 0.01 * x);  // sprung: d grows toward the tip
+      d.push_back(0.01 * x);
+      points.emplace_back(x, y + 50.0, 0.0);  // flat, on its CAD
+      d.push_back(0.0);
+    }
+  std::vector<Vec3> samples, normals;
+  for (int i = 0; i <= 100; ++i)
+    for (int j = 0; j <= 45; ++j)
+      samples.emplace_back(i, 2.0 * j, 0.0), normals.push_back(Vec3::UnitZ());
+  const KdTree tree(samples);
+  FrameUncertainty frame;
+  frame.pairs = 100;
+  frame.center = Vec3(50.0, 45.0, 0.0);
+  frame.covariance.setZero();
+  frame.covariance(1, 1) = std::pow(0.002, 2);  // turn about y (rad)
+  frame.covariance(5, 5) = std::pow(0.03, 2);   // move along z (mm)
+  frame.covariance(0, 0) = std::pow(0.001, 2);  // turn about x
+  const double sigma = frame_statistic_sigma(frame, points, d, 0.95, tree, normals);
+  std::mt19937 rng(41);
+  std::normal_distribution<double> g;
+  const Vec3 c = frame.center;
+  double sum = 0.0, sum2 = 0.0;
+  const double p0 = p95_of(d);
+  constexpr int kDraws = 400;
+  for (int k = 0; k < kDraws; ++k) {
+    const Vec3 w(0.001 * g(rng), 0.002 * g(rng), 0.0);
+    const Vec3 t(0.0, 0.0, 0.03 * g(rng));
+    std::vector<double> moved(d.size());
+    for (std::size_t i = 0; i < d.size(); ++i)
+      moved[i] = d[i] + Vec3::UnitZ().dot(w.cross(points[i] - c) + t);
+    const double dp = p95_of(moved) - p0;
+    sum += dp, sum2 += dp * dp;
+  }
+  const double truth = std::sqrt(sum2 / kDraws - std::pow(sum / kDraws, 2));
+  EXPECT_NEAR(sigma, truth, 0.15 * truth);
+  // The departure alone: a move of its size along the points' normal, and its turn.
+  frame.covariance.setZero();
+  frame.departure_mm = 0.05;
+  frame.radius_mm = 1e9;  // no turn
+  EXPECT_NEAR(frame_statistic_sigma(frame, points, d, 0.95, tree, normals), 0.05, 1e-6);
+  // Points pushed out as many as in (|d| alike on both sides of the surface): a move along the
+  // normal leaves the p95 in place.
+  for (std::size_t i = 0; i < d.size(); i += 4) d[i] = -d[i];  // every other sprung point
+  EXPECT_LT(frame_statistic_sigma(frame, points, d, 0.95, tree, normals), 0.01);
+  // The frame's move at a point along a direction.
+  EXPECT_NEAR(frame_point_sigma(frame, Vec3(3, 4, 5), Vec3::UnitX()), 0.05, 1e-9);
+}
+
+// The distances' own noise from consecutive neighbours (a scanner's line order), on a surface
+// whose deviation varies slowly; points in no order tell nothing.
+TEST(NeighbourNoise, IsTheNoiseOfTheDistancesAlongTheScansLines) {
+  std::mt19937 rng(4141);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  std::vector<Vec3> points;
+  std::vector<double> d;
+  for (int line = 0; line < 100; ++line)
+    for (int i = 0; i < 400; ++i) {
+      const double x = 0.2 * i, y = 1.0 * line;
+      points.emplace_back(x, y, 0.0);
+      d.push_back(0.002 * x + 0.1 * std::sin(0.05 * y) + noise(rng));
+    }
+  EXPECT_NEAR(neighbour_noise_mm(points, d), 0.03, 0.003);
+  std::vector<std::size_t> order(points.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::shuffle(order.begin(), order.end(), rng);
+  std::vector<Vec3> shuffled;
+  std::vector<double> d_shuffled;
+  for (std::size_t i : order) shuffled.push_back(points[i]), d_shuffled.push_back(d[i]);
+  EXPECT_EQ(neighbour_noise_mm(shuffled, d_shuffled), 0.0);
 }
 
 TEST(Uncertainty, SettingsOutOfRangeAreNamed) {
