@@ -148,7 +148,9 @@ BENCHMARK(BM_DeviationSidePanel1M)
 
 // The uncertainty stage alone (docs/uncertainty.md) on the same scan in its true pose: the
 // flanges' covariances and every bend's budget from the springback stage's result, and the result
-// frame's from the reduced scan's pairs (as the pipeline gives it, 1 point in 20 here). Its share
+// frame's from the reduced scan's pairs (as the pipeline gives it, 1 point in 20 here), and the
+// deviation statistics' (the frame through the p95 and the largest |d|, the distances' noise over
+// the 1M points). Its share
 // of BM_InspectionSidePanel1M's total is the stage's cost (issue 41: at most 5 %).
 void BM_UncertaintySidePanel1M(benchmark::State& state) {
   const Data& d = data();
@@ -165,10 +167,22 @@ void BM_UncertaintySidePanel1M(benchmark::State& state) {
   std::vector<Vec3> fit_points;
   for (std::size_t i = 0; i < in_cad.size(); i += 20) fit_points.push_back(in_cad.points[i]);
   const KdTree tree(d.model.samples.points);
+  const auto deviation = signed_deviation(in_cad.points, d.model, tree);
+  if (!deviation) {
+    state.SkipWithError(deviation.message().c_str());
+    return;
+  }
+  const std::vector<double>& dist = deviation->signed_distance_mm;
   for (auto _ : state) {
     benchmark::DoNotOptimize(estimate_uncertainty(*springback, 500.0));
     const FrameUncertainty frame = frame_uncertainty(fit_points, tree, d.model.samples.normals);
     state.counters["frame_U_mm"] = frame.translation_mm;
+    // The deviation statistics' U (the pipeline's): the frame through each statistic, the noise.
+    const auto& normals = d.model.samples.normals;
+    benchmark::DoNotOptimize(
+        frame_statistic_sigma(frame, in_cad.points, dist, 0.95, tree, normals) +
+        frame_statistic_sigma(frame, in_cad.points, dist, 1.0, tree, normals) +
+        neighbour_noise_mm(in_cad.points, dist));
   }
 }
 BENCHMARK(BM_UncertaintySidePanel1M)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace springscan::analysis {
@@ -31,12 +32,14 @@ double largest_move(const Mat6& cov, const Vec3& c, const Vec3& lo, const Vec3& 
 }
 
 // The standard uncertainty of a value whose change is g . (rotation, translation): the
-// covariance's part, and the departure's, which moves the frame by about its size in any
-// direction and turns it by that over the points' half-diagonal about any axis.
+// covariance's part, and the departure's: a move of about its size in a direction not known,
+// and a turn of that over the points' half-diagonal about an axis not known, each isotropic
+// (a third of its variance along each axis, as the frame's U takes d for the whole move).
 double sensitivity_sigma(const FrameUncertainty& frame, const Vec6& g) {
   const double turn = frame.departure_mm / frame.radius_mm;
-  const double departure2 = frame.departure_mm * frame.departure_mm * g.tail<3>().squaredNorm() +
-                            turn * turn * g.head<3>().squaredNorm();
+  const double departure2 = (frame.departure_mm * frame.departure_mm * g.tail<3>().squaredNorm() +
+                             turn * turn * g.head<3>().squaredNorm()) /
+                            3.0;
   return std::sqrt(std::max(0.0, g.dot(frame.covariance * g) + departure2));
 }
 
@@ -157,9 +160,14 @@ double frame_statistic_sigma(const FrameUncertainty& frame, const std::vector<Ve
     return 0.0;
   // The |d| bounds of the ranks next to the quantile: a window of 5 % about a p95 (the quantile
   // moves as the mean of its neighbours' moves), the top 0.1 % for the largest.
+  // The bounds from at most kMaxRanked of the values, evenly (ranks to about 0.1 %): a 1M-point
+  // scan's full sort would cost more than the rest of the uncertainty stage.
   const double half = quantile >= 1.0 ? 0.001 : 0.025;
-  std::vector<double> magnitude(d.size());
-  for (std::size_t i = 0; i < d.size(); ++i) magnitude[i] = std::abs(d[i]);
+  constexpr std::size_t kMaxRanked = 100000;
+  const std::size_t every = std::max<std::size_t>(1, d.size() / kMaxRanked);
+  std::vector<double> magnitude;
+  magnitude.reserve(d.size() / every + 1);
+  for (std::size_t i = 0; i < d.size(); i += every) magnitude.push_back(std::abs(d[i]));
   const auto at = [&](double q) {
     const auto rank = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) *
                                                static_cast<double>(magnitude.size() - 1));
@@ -167,7 +175,9 @@ double frame_statistic_sigma(const FrameUncertainty& frame, const std::vector<Ve
                      magnitude.end());
     return magnitude[rank];
   };
-  const double lo = at(quantile - half), hi = at(quantile + half);
+  const double lo = at(quantile - half);
+  const double hi =
+      quantile + half >= 1.0 ? std::numeric_limits<double>::infinity() : at(quantile + half);
   std::vector<std::size_t> near;
   for (std::size_t i = 0; i < d.size(); ++i)
     if (std::abs(d[i]) >= lo && std::abs(d[i]) <= hi) near.push_back(i);

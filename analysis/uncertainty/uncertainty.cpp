@@ -348,15 +348,12 @@ FlangeBudget flange_budget(const FlangeModel& f, double noise, double extent_mm,
     const double sigma_a = std::sqrt(f.curl.a_variance(std::max(f.curl.sigma_mm, floor_sigma)));
     out.curl_radius_mm = 2.0 * sq(shape.curl_radius_mm) * sigma_a;
   }
-  // A trim edge is the extreme of the points in strips, band / n taken off: within about one
-  // point spacing of the true edge (uniform over +-spacing: spacing / sqrt 3), plus the noise;
-  // spacing from the points' spread (an even rectangle). The result frame's move at the edge
-  // is added per edge (attach_uncertainty).
+  // A trim edge: the noise, the calibration and the expansion here; its line's own error (from
+  // the point spacing, the spread's even rectangle) and the result frame's move at the edge per
+  // edge (attach_uncertainty).
   const double area = 12.0 * std::sqrt(std::max(0.0, f.plane.scatter.determinant()));
-  const double spacing =
-      f.plane.points > 0 ? std::sqrt(area / static_cast<double>(f.plane.points)) : 0.0;
-  out.edge_mm = rss({spacing / std::sqrt(3.0), std::max(noise, floor_sigma),
-                     st.calibration_length_mm, thermal_mm});
+  out.spacing_mm = f.plane.points > 0 ? std::sqrt(area / static_cast<double>(f.plane.points)) : 0.0;
+  out.edge_mm = rss({std::max(noise, floor_sigma), st.calibration_length_mm, thermal_mm});
   return out;
 }
 
@@ -435,6 +432,15 @@ UncertaintyResult estimate_uncertainty(const SpringbackResult& sb, double extent
 
 namespace {
 
+// The edge line's own error (standard, mm): the line over the upper hull of the points of all
+// its strips (springback/flange_edge.cpp), band / n taken off, lies short of the edge by an
+// exponential share of one point's area over the edge's length, s^2 / L, and its ends by about
+// twice that; never more than one spacing.
+double edge_line_sigma(const FlangeBudget& f, const EdgeDeviation& e) {
+  if (!(e.length_mm > 0.0)) return f.spacing_mm;
+  return std::min(f.spacing_mm, 2.0 * f.spacing_mm * f.spacing_mm / e.length_mm);
+}
+
 // The result frame's largest move at an edge's strips, in plane (outward) or across (standard).
 double edge_frame_sigma(const FrameUncertainty* frame, const EdgeDeviation& e) {
   if (!frame) return 0.0;
@@ -469,7 +475,8 @@ void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb,
       flange.shape.curl_radius_uncertainty_mm = k * u.flanges[f].curl_radius_mm;
     for (EdgeDeviation& e : flange.trim_edges)
       if (e.measured)
-        e.uncertainty_mm = k * rss({u.flanges[f].edge_mm, edge_frame_sigma(frame, e)});
+        e.uncertainty_mm = k * rss({u.flanges[f].edge_mm, edge_line_sigma(u.flanges[f], e),
+                                    edge_frame_sigma(frame, e)});
   }
 }
 

@@ -52,7 +52,8 @@ struct BendBudget {
 struct FlangeBudget {
   double flatness_mm = 0.0;
   double curl_radius_mm = 0.0;  ///< 0 when not curled
-  double edge_mm = 0.0;         ///< of each trim edge's largest move
+  double edge_mm = 0.0;         ///< of each trim edge's largest move: noise, calibration, heat
+  double spacing_mm = 0.0;      ///< the flange's point spacing (its edge line's own error)
 };
 
 struct UncertaintyResult {

@@ -94,13 +94,14 @@ TEST(FrameStatistic, SigmaIsTheStatisticsMoveUnderTheFramesCovariance) {
   frame.covariance.setZero();
   frame.departure_mm = 0.05;
   frame.radius_mm = 1e9;  // no turn
-  EXPECT_NEAR(frame_statistic_sigma(frame, points, d, 0.95, tree, normals), 0.05, 1e-6);
+  EXPECT_NEAR(frame_statistic_sigma(frame, points, d, 0.95, tree, normals), 0.05 / std::sqrt(3.0),
+              1e-6);
   // Points pushed out as many as in (|d| alike on both sides of the surface): a move along the
   // normal leaves the p95 in place.
   for (std::size_t i = 0; i < d.size(); i += 4) d[i] = -d[i];  // every other sprung point
   EXPECT_LT(frame_statistic_sigma(frame, points, d, 0.95, tree, normals), 0.01);
   // The frame's move at a point along a direction.
-  EXPECT_NEAR(frame_point_sigma(frame, Vec3(3, 4, 5), Vec3::UnitX()), 0.05, 1e-9);
+  EXPECT_NEAR(frame_point_sigma(frame, Vec3(3, 4, 5), Vec3::UnitX()), 0.05 / std::sqrt(3.0), 1e-9);
 }
 
 // The distances' own noise from consecutive neighbours (a scanner's line order), on a surface
