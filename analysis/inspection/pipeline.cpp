@@ -552,6 +552,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
       std::max(neighbour_noise_mm(out.deviation_cloud.points, deviation->signed_distance_mm),
                springback ? part_noise_mm(*springback) : fit_rms_residual_mm);
   attach_deviation_uncertainty(noise_mm, frame_sigma(0.95), frame_sigma(1.0),
+                               p95_outlier_shift_mm(deviation->signed_distance_mm),
                                part_extent_mm(out.deviation_cloud), config->uncertainty,
                                deviation->statistics);
   // deviation.uncertainty_mm: the verdict copies the U of the statistic it judged.

@@ -507,9 +507,27 @@ double neighbour_noise_mm(const std::vector<Vec3>& points, const std::vector<dou
   return 1.4826 * *mid / std::sqrt(2.0);
 }
 
+double p95_outlier_shift_mm(const std::vector<double>& d) {
+  if (d.size() < 20) return 0.0;
+  constexpr std::size_t kMaxRanked = 100000;  // ranks to about 0.1 %
+  const std::size_t every = std::max<std::size_t>(1, d.size() / kMaxRanked);
+  std::vector<double> magnitude;
+  magnitude.reserve(d.size() / every + 1);
+  for (std::size_t i = 0; i < d.size(); i += every) magnitude.push_back(std::abs(d[i]));
+  const auto at = [&](double q) {
+    const auto rank = static_cast<std::size_t>(q * static_cast<double>(magnitude.size() - 1));
+    std::nth_element(magnitude.begin(), magnitude.begin() + static_cast<long>(rank),
+                     magnitude.end());
+    return magnitude[rank];
+  };
+  constexpr double kOutlierShare = 0.02;
+  const double p95 = at(0.95);
+  return std::max(0.0, p95 - at(0.95 - kOutlierShare));
+}
+
 void attach_deviation_uncertainty(double noise_mm, double frame_p95_mm, double frame_max_mm,
-                                  double part_extent_mm, const UncertaintySettings& st,
-                                  DeviationStatistics& statistics) {
+                                  double outlier_shift_mm, double part_extent_mm,
+                                  const UncertaintySettings& st, DeviationStatistics& statistics) {
   if (statistics.points == 0) return;
   const double k = st.coverage_factor;
   const double thermal =
@@ -521,7 +539,10 @@ void attach_deviation_uncertainty(double noise_mm, double frame_p95_mm, double f
   // noise and, as an extreme, up to ~3 sigmas of it.
   constexpr double kP95NoiseFactor = 2.2 / 1.7320508075688772;
   const double station = rss({st.calibration_length_mm, thermal});
-  statistics.p95_uncertainty_mm = k * rss({kP95NoiseFactor * noise, frame_p95_mm, station});
+  // Outliers above the p95 (up to 2 % of the points) raise its rank among the surface's own
+  // distances by their share: uniform over [0, the shift].
+  statistics.p95_uncertainty_mm =
+      k * rss({kP95NoiseFactor * noise, outlier_shift_mm / std::sqrt(3.0), frame_p95_mm, station});
   statistics.max_uncertainty_mm = k * rss({1.5 * noise, frame_max_mm, station});
 }
 

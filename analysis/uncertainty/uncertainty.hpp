@@ -90,12 +90,18 @@ double part_noise_mm(const SpringbackResult& springback);
 double neighbour_noise_mm(const std::vector<Vec3>& points, const std::vector<double>& signed_mm,
                           double neighbour_mm = 0.5);
 
+/// How far outliers above the p95 of |d| (up to 2 % of the points: the scanner's share the
+/// station is specified for) can raise it: the p95 less the 93rd percentile of `signed_mm`.
+double p95_outlier_shift_mm(const std::vector<double>& signed_mm);
+
 /// Writes the expanded uncertainties of the deviation statistics: the noise of one point
 /// (`noise_mm`: part_noise_mm, or the global fit's residual), the result frame's standard
 /// uncertainty of each statistic (`frame_p95_mm`, `frame_max_mm`: frame_statistic_sigma), the
-/// calibration length and the expansion over `part_extent_mm`.
+/// outliers' shift of the p95 (`outlier_shift_mm`: p95_outlier_shift_mm), the calibration
+/// length and the expansion over `part_extent_mm`.
 void attach_deviation_uncertainty(double noise_mm, double frame_p95_mm, double frame_max_mm,
-                                  double part_extent_mm, const UncertaintySettings& settings,
+                                  double outlier_shift_mm, double part_extent_mm,
+                                  const UncertaintySettings& settings,
                                   DeviationStatistics& statistics);
 
 }  // namespace springscan::analysis

@@ -127,6 +127,16 @@ TEST(NeighbourNoise, IsTheNoiseOfTheDistancesAlongTheScansLines) {
   EXPECT_EQ(neighbour_noise_mm(shuffled, d_shuffled), 0.0);
 }
 
+// Outliers of 2 % above the p95 of a surface whose |d| spreads evenly over [0, 1] mm raise it
+// from 0.95 to about 0.969: the shift the p95's U allows for is the p95 less the 93rd percentile.
+TEST(OutlierShift, IsTheP95LessItsRankTwoPercentLower) {
+  std::vector<double> d;
+  for (int i = 0; i <= 100000; ++i) d.push_back((i % 2 ? -1.0 : 1.0) * i / 100000.0);
+  EXPECT_NEAR(p95_outlier_shift_mm(d), 0.02, 1e-4);
+  for (double& x : d) x = 0.3;  // a constant offset: no spread, no shift
+  EXPECT_EQ(p95_outlier_shift_mm(d), 0.0);
+}
+
 TEST(Uncertainty, SettingsOutOfRangeAreNamed) {
   UncertaintySettings st;
   st.scanner_sigma_mm = -1.0;
