@@ -20,6 +20,7 @@
 #include "analysis/messages/alignment_proto.hpp"
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/sheet_cutouts.hpp"
+#include "tests/analysis/inspection/datum_truth.hpp"
 #include "tests/analysis/matching/field_truth.hpp"
 #include "tests/analysis/under_sanitizer.hpp"
 
@@ -164,58 +165,6 @@ struct Outcome {
   std::string measured_by;
 };
 
-// The frame's noise floor from the report: each datum's fixed directions with the standard error
-// of its measurement (a pad's plane at its centre: rms / sqrt(n); a hole's centre: rms x
-// sqrt(2 / n); a slot's mid-plane: rms / sqrt(n / 2)), propagated through the weighted 3-2-1
-// solve at the nominal points; the largest 1-sigma move over `points`, and the rotation's.
-std::pair<double, double> noise_floor(const v1::Alignment& a, const std::vector<Datum>& datums,
-                                      const std::vector<Vec3>& points) {
-  Vec3 o = Vec3::Zero();
-  for (const Datum& d : datums) o += d.point / static_cast<double>(datums.size());
-  Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
-  for (std::size_t k = 0; k < datums.size(); ++k) {
-    const Datum& d = datums[k];
-    const auto n =
-        static_cast<double>(std::max<std::int64_t>(a.datums(static_cast<int>(k)).points(), 1));
-    const double rms = std::max(a.datums(static_cast<int>(k)).fit_rms_mm(), 1e-3);
-    double sigma = rms / std::sqrt(n);
-    std::vector<Vec3> dirs = {d.normal};
-    if (d.kind == DatumKind::kHole) {
-      sigma = rms * std::sqrt(2.0 / n);
-      dirs = d.direction.isZero() ? std::vector<Vec3>{d.normal.unitOrthogonal(),
-                                                      d.normal.cross(d.normal.unitOrthogonal())}
-                                  : std::vector<Vec3>{d.direction};
-    } else if (d.kind == DatumKind::kSlot) {
-      sigma = rms / std::sqrt(0.5 * n);
-      dirs = {d.direction};
-    }
-    for (const Vec3& u : dirs) {
-      Eigen::Matrix<double, 6, 1> row;
-      row << (d.point - o).cross(u), u;
-      info += row * row.transpose() / (sigma * sigma);
-    }
-  }
-  const Eigen::Matrix<double, 6, 6> cov = info.inverse();
-  double shift = 0.0;
-  for (const Vec3& q : points) {
-    Eigen::Matrix<double, 3, 6> A;
-    const Vec3 r = q - o;
-    A << 0, r.z(), -r.y(), 1, 0, 0, -r.z(), 0, r.x(), 0, 1, 0, r.y(), -r.x(), 0, 0, 0, 1;
-    const Mat3 c = A * cov * A.transpose();
-    shift =
-        std::max(shift, std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(c).eigenvalues().maxCoeff()));
-  }
-  const double rot = std::sqrt(
-      Eigen::SelfAdjointEigenSolver<Mat3>(cov.topLeftCorner<3, 3>()).eigenvalues().maxCoeff());
-  return {rot * 180.0 / std::numbers::pi, shift};
-}
-
-std::pair<double, double> frame_error(const Transform& E, const std::vector<Vec3>& points) {
-  double shift = 0.0;
-  for (const Vec3& p : points) shift = std::max(shift, (E * p - p).norm());
-  return {Eigen::AngleAxisd(E.linear()).angle() * 180.0 / std::numbers::pi, shift};
-}
-
 Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, bool noisy,
                  unsigned seed) {
   Outcome out;
@@ -268,14 +217,15 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
   for (const Datum& d : ds.datums) points.push_back(d.point);
   const double length = p.spec.flange_lengths_mm[static_cast<std::size_t>(p.root)];
   points.push_back(f.at({0.5 * length, 0.5 * p.spec.width_mm}));  // the root's centroid
-  std::tie(out.best_rotation_deg, out.best_shift_mm) = frame_error(
+  std::tie(out.best_rotation_deg, out.best_shift_mm) = testing::datum_frame_error(
       testing::from_row_major(outcome->report.global_fit().transform()) * ls.T_scan_part, points);
   EXPECT_TRUE(a.achieved()) << p.name << " " << v.name << ": " << a.failure() << " (best fit "
                             << out.best_rotation_deg << " deg, " << out.best_shift_mm << " mm)";
   if (!a.achieved()) return out;
   std::tie(out.rotation_deg, out.shift_mm) =
-      frame_error(testing::from_row_major(a.transform()) * ls.T_scan_part, points);
-  std::tie(out.floor_rotation_deg, out.floor_shift_mm) = noise_floor(a, ds.datums, points);
+      testing::datum_frame_error(testing::from_row_major(a.transform()) * ls.T_scan_part, points);
+  std::tie(out.floor_rotation_deg, out.floor_shift_mm) =
+      testing::datum_noise_floor(a, ds.datums, points);
   for (const auto& d : a.datums())
     out.measured_by += (out.measured_by.empty() ? "" : ", ") + d.name() + " " + d.measured_by();
   return out;

@@ -1,0 +1,71 @@
+#pragma once
+// The truth side of the datum tests (docs/alignment.md "Own parts", "Production parts"): how far
+// a result frame is from the constructed one, and the frame's noise floor from what the report
+// says it measured.
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "analysis/registration/datum.hpp"
+#include "proto/springscan.pb.h"
+
+namespace springscan::analysis::testing {
+
+// The frame's noise floor from the report: each datum's fixed directions with the standard error
+// of its measurement (a pad's plane at its centre: rms / sqrt(n); a hole's centre: rms x
+// sqrt(2 / n); a slot's mid-plane: rms / sqrt(n / 2)), propagated through the weighted 3-2-1
+// solve at the nominal points; the largest 1-sigma move over `points`, and the rotation's.
+inline std::pair<double, double> datum_noise_floor(const v1::Alignment& a, const std::vector<Datum>& datums,
+                                      const std::vector<Vec3>& points) {
+  Vec3 o = Vec3::Zero();
+  for (const Datum& d : datums) o += d.point / static_cast<double>(datums.size());
+  Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
+  for (std::size_t k = 0; k < datums.size(); ++k) {
+    const Datum& d = datums[k];
+    const auto n =
+        static_cast<double>(std::max<std::int64_t>(a.datums(static_cast<int>(k)).points(), 1));
+    const double rms = std::max(a.datums(static_cast<int>(k)).fit_rms_mm(), 1e-3);
+    double sigma = rms / std::sqrt(n);
+    std::vector<Vec3> dirs = {d.normal};
+    if (d.kind == DatumKind::kHole) {
+      sigma = rms * std::sqrt(2.0 / n);
+      dirs = d.direction.isZero() ? std::vector<Vec3>{d.normal.unitOrthogonal(),
+                                                      d.normal.cross(d.normal.unitOrthogonal())}
+                                  : std::vector<Vec3>{d.direction};
+    } else if (d.kind == DatumKind::kSlot) {
+      sigma = rms / std::sqrt(0.5 * n);
+      dirs = {d.direction};
+    }
+    for (const Vec3& u : dirs) {
+      Eigen::Matrix<double, 6, 1> row;
+      row << (d.point - o).cross(u), u;
+      info += row * row.transpose() / (sigma * sigma);
+    }
+  }
+  const Eigen::Matrix<double, 6, 6> cov = info.inverse();
+  double shift = 0.0;
+  for (const Vec3& q : points) {
+    Eigen::Matrix<double, 3, 6> A;
+    const Vec3 r = q - o;
+    A << 0, r.z(), -r.y(), 1, 0, 0, -r.z(), 0, r.x(), 0, 1, 0, r.y(), -r.x(), 0, 0, 0, 1;
+    const Mat3 c = A * cov * A.transpose();
+    shift =
+        std::max(shift, std::sqrt(Eigen::SelfAdjointEigenSolver<Mat3>(c).eigenvalues().maxCoeff()));
+  }
+  const double rot = std::sqrt(
+      Eigen::SelfAdjointEigenSolver<Mat3>(cov.topLeftCorner<3, 3>()).eigenvalues().maxCoeff());
+  return {rot * 180.0 / std::numbers::pi, shift};
+}
+
+inline std::pair<double, double> datum_frame_error(const Transform& E, const std::vector<Vec3>& points) {
+  double shift = 0.0;
+  for (const Vec3& p : points) shift = std::max(shift, (E * p - p).norm());
+  return {Eigen::AngleAxisd(E.linear()).angle() * 180.0 / std::numbers::pi, shift};
+}
+
+}  // namespace springscan::analysis::testing
