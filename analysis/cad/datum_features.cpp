@@ -30,7 +30,8 @@ PadCandidate pad_of(const Flange& flange, const std::vector<CadFaceInfo>& faces)
   return pad;
 }
 
-// Concave cylinder faces of no bend, grouped by axis and radius (one group per hole or notch).
+// Concave cylinder faces of no bend, grouped by axis and radius and split into the sets of
+// faces that meet (one group per hole, slot end or notch).
 std::vector<std::vector<int>> hole_wall_groups(const std::vector<CadFaceInfo>& faces,
                                                const PartSegmentation& segmentation,
                                                const DatumCandidateSettings& s) {
@@ -53,7 +54,25 @@ std::vector<std::vector<int>> hole_wall_groups(const std::vector<CadFaceInfo>& f
     else
       it->push_back(f.id);
   }
-  return groups;
+  // One hole's faces meet: coaxial faces apart are other holes on the axis (the side panel's two
+  // walls have their slots' ends on common axes, whose half circles summed to a full one).
+  std::vector<std::vector<int>> connected;
+  for (const std::vector<int>& g : groups) {
+    std::vector<bool> taken(g.size(), false);
+    for (std::size_t seed = 0; seed < g.size(); ++seed) {
+      if (taken[seed]) continue;
+      std::vector<int> part = {g[seed]};
+      taken[seed] = true;
+      for (std::size_t k = 0; k < part.size(); ++k) {
+        const std::vector<int>& next = faces[static_cast<std::size_t>(part[k])].neighbors;
+        for (std::size_t j = 0; j < g.size(); ++j)
+          if (!taken[j] && std::find(next.begin(), next.end(), g[j]) != next.end())
+            taken[j] = true, part.push_back(g[j]);
+      }
+      connected.push_back(std::move(part));
+    }
+  }
+  return connected;
 }
 
 // The flange a hole wall group goes through: a neighbouring skin whose normal is the axis.

@@ -2,6 +2,7 @@
 // datum frame solve and the measure-and-solve passes (datum.hpp).
 #include "analysis/registration/datum.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -328,6 +329,37 @@ std::optional<Error> validate(const DatumAlignmentSettings& s, std::string_view 
   return std::nullopt;
 }
 
+namespace {
+
+// The datum alignment from the start T_cad_scan_best (method in datum.hpp); `datums` with their
+// wall heights resolved.
+DatumAlignmentResult align_from(const std::vector<Vec3>& scan,
+                                const std::vector<Vec3>& scan_normals,
+                                const Transform& T_cad_scan_best, const std::vector<Datum>& datums,
+                                const DatumAlignmentSettings& settings);
+
+// Half turns of the CAD part about its principal axes through its centroid (its samples'): the
+// rivals of a near-symmetric part's best fit (docs/alignment.md "Near-symmetry").
+std::vector<Transform> half_turns(const PartModel& model) {
+  const std::vector<Vec3>& pts = model.samples.points;
+  if (pts.size() < 3) return {};
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : pts) c += p / static_cast<double>(pts.size());
+  Mat3 cov = Mat3::Zero();
+  for (const Vec3& p : pts) cov += (p - c) * (p - c).transpose();
+  const Mat3 axes = Eigen::SelfAdjointEigenSolver<Mat3>(cov).eigenvectors();
+  std::vector<Transform> out;
+  for (int k = 2; k >= 0; --k) {
+    Transform H = Transform::Identity();
+    H.linear() = Eigen::AngleAxisd(std::numbers::pi, axes.col(k)).toRotationMatrix();
+    H.translation() = c - H.linear() * c;
+    out.push_back(H);
+  }
+  return out;
+}
+
+}  // namespace
+
 Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
                                                const std::vector<Vec3>& scan_normals,
                                                const Transform& T_cad_scan_best,
@@ -345,6 +377,36 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
                   "alignment: datum '" + d.name + "' (" + to_string(d.kind) +
                       "): no wall height (no solid flange at its point; set thickness_mm)");
   }
+  DatumAlignmentResult out = align_from(scan, scan_normals, T_cad_scan_best, datums, settings);
+  if (out.achieved) return out;
+  // A near-symmetric part's best fit may lie turned half round (the side panel's, seen all
+  // round): its datums are then where the scan shows other features or none. From the half
+  // turns of the part, the one whose datums are all measured; else the best fit's failure.
+  for (const Transform& H : half_turns(model)) {
+    DatumAlignmentResult turned =
+        align_from(scan, scan_normals, H * T_cad_scan_best, datums, settings);
+    if (!turned.achieved) continue;
+    turned.T_datum_best = turned.T_cad_scan * T_cad_scan_best.inverse();
+    turned.rounds.insert(turned.rounds.begin(), DatumRound{"half turn", 0.0, 0.0, 180.0});
+    for (const Datum& d : datums)
+      turned.rounds.front().moved_mm =
+          std::max(turned.rounds.front().moved_mm, (H * d.point - d.point).norm());
+    turned.passes = static_cast<int>(turned.rounds.size());
+    const Transform back = turned.T_datum_best.inverse();
+    for (DatumResult& r : turned.datums)
+      r.best_fit_residual = residual_of(r.datum, back * r.measured);
+    return turned;
+  }
+  out.T_cad_scan = T_cad_scan_best;
+  return out;
+}
+
+namespace {
+
+DatumAlignmentResult align_from(const std::vector<Vec3>& scan,
+                                const std::vector<Vec3>& scan_normals,
+                                const Transform& T_cad_scan_best, const std::vector<Datum>& datums,
+                                const DatumAlignmentSettings& settings) {
   const Information info = information(datums);
   const bool capture = settings.capture_mm > settings.search_mm && settings.max_capture_rounds > 0;
   // The capture rounds read every stride-th scan point (at most kCapturePoints), gathered
@@ -437,5 +499,7 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
   }
   return out;
 }
+
+}  // namespace
 
 }  // namespace springscan::analysis

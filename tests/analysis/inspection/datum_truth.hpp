@@ -20,8 +20,9 @@ namespace springscan::analysis::testing {
 // of its measurement (a pad's plane at its centre: rms / sqrt(n); a hole's centre: rms x
 // sqrt(2 / n); a slot's mid-plane: rms / sqrt(n / 2)), propagated through the weighted 3-2-1
 // solve at the nominal points; the largest 1-sigma move over `points`, and the rotation's.
-inline std::pair<double, double> datum_noise_floor(const v1::Alignment& a, const std::vector<Datum>& datums,
-                                      const std::vector<Vec3>& points) {
+inline std::pair<double, double> datum_noise_floor(const v1::Alignment& a,
+                                                   const std::vector<Datum>& datums,
+                                                   const std::vector<Vec3>& points) {
   Vec3 o = Vec3::Zero();
   for (const Datum& d : datums) o += d.point / static_cast<double>(datums.size());
   Eigen::Matrix<double, 6, 6> info = Eigen::Matrix<double, 6, 6>::Zero();
@@ -39,6 +40,8 @@ inline std::pair<double, double> datum_noise_floor(const v1::Alignment& a, const
                                   : std::vector<Vec3>{d.direction};
     } else if (d.kind == DatumKind::kSlot) {
       sigma = rms / std::sqrt(0.5 * n);
+      dirs = {d.direction};
+    } else if (d.kind == DatumKind::kEdge) {  // the skin's end: its points' spread across it
       dirs = {d.direction};
     }
     for (const Vec3& u : dirs) {
@@ -62,7 +65,8 @@ inline std::pair<double, double> datum_noise_floor(const v1::Alignment& a, const
   return {rot * 180.0 / std::numbers::pi, shift};
 }
 
-inline std::pair<double, double> datum_frame_error(const Transform& E, const std::vector<Vec3>& points) {
+inline std::pair<double, double> datum_frame_error(const Transform& E,
+                                                   const std::vector<Vec3>& points) {
   double shift = 0.0;
   for (const Vec3& p : points) shift = std::max(shift, (E * p - p).norm());
   return {Eigen::AngleAxisd(E.linear()).angle() * 180.0 / std::numbers::pi, shift};

@@ -402,6 +402,33 @@ TEST(DatumAlignment, HoleSeenOverPartOfItsWallUsesItsRim) {
 
 // A datum the scan does not show (hole C's wall and skin cut away): the frame stays the best
 // fit, marked not achieved, with the datum named and why (the pipeline fails the verdict).
+// A near-symmetric part's best fit turned half round (the side panel's, seen all round): the
+// plate turned about its normal puts hole B's 8 mm datum on the 6 mm hole, so not every datum
+// is measured from it; from the part's half turns, the one that measures them all.
+TEST(DatumAlignment, BestFitTurnedHalfRoundIsTurnedBack) {
+  const Plate p = plate();
+  const Case c = scan_case(p, 11);
+  PartModel model = plate_model();
+  model.samples.points = p.points;  // the part's principal axes
+  Transform half = Transform::Identity();
+  half.linear() = Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitZ()).toRotationMatrix();
+  half.translation() = Vec3(50, 30, 0) - half.linear() * Vec3(50, 30, 0);
+  auto r = align_to_datums(c.scan, c.normals, half * c.best, model, three_two_one());
+  ASSERT_TRUE(r) << r.message();
+  ASSERT_TRUE(r->achieved) << r->failure;
+  ASSERT_FALSE(r->rounds.empty());
+  EXPECT_EQ(r->rounds.front().stage, "half turn");
+  const auto [deg, mm] = frame_error(r->T_cad_scan, c.pose);
+  std::printf("half turn: %.5f deg, %.5f mm\n", deg, mm);
+  EXPECT_LE(deg, 0.005);
+  EXPECT_LE(mm, 0.01);
+  // Without the part's samples there is no half turn to try: the datum is named.
+  auto plain = align_to_datums(c.scan, c.normals, half * c.best, plate_model(), three_two_one());
+  ASSERT_TRUE(plain) << plain.message();
+  EXPECT_FALSE(plain->achieved);
+  EXPECT_TRUE(plain->T_cad_scan.isApprox(half * c.best));
+}
+
 TEST(DatumAlignment, UnmeasurableDatumIsNamedAndTheFrameIsTheBestFit) {
   Plate p = plate(/*wall_b=*/false);
   Plate cut;
