@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <numbers>
 
 #include "analysis/cad/sampling.hpp"
 #include "tests/simulators/parts/production_parts.hpp"
@@ -65,6 +69,59 @@ INSTANTIATE_TEST_SUITE_P(
     [](const ::testing::TestParamInfo<std::string>& p) {
       return std::string(p.index == 0 ? "NemaBracket" : p.index == 1 ? "FrontPanel" : "SidePanel");
     });
+
+// Every round hole listed is a disc of the flange's skin with no material inside and material
+// all round it (in each of 12 sectors): the side panel's slots, whose ends lie on common axes
+// across its two walls, were once listed as 4.3 mm holes (their half circles summed to one).
+class HoleCandidates : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(HoleCandidates, EachIsARoundHoleThroughItsFlange) {
+  const auto& cad = parts::testing::loaded_part(GetParam());
+  const auto faces = describe_faces(cad.shape);
+  const DatumCandidates c = datum_candidates(cad.shape, faces, cad.model.segmentation);
+  auto samples = sample_cad(cad.shape, {.sample_count = 400000, .seed = 9});
+  ASSERT_TRUE(samples) << samples.message();
+  for (const HoleCandidate& h : c.holes) {
+    const std::string what = GetParam() + " hole at " + ::testing::PrintToString(h.centre);
+    const Vec3 e1 = h.axis.unitOrthogonal(), e2 = h.axis.cross(e1);
+    const double r = 0.5 * h.diameter_mm;
+    int inside = 0;
+    std::array<int, 12> around{};
+    for (std::size_t i = 0; i < samples->size(); ++i) {
+      const Vec3 v = samples->points[i] - h.centre;
+      const double z = v.dot(h.axis);
+      const bool on_skin = std::abs(z) < 0.01 || std::abs(z + h.thickness_mm) < 0.01;
+      if (!on_skin || std::abs(samples->normals[i].dot(h.axis)) < 0.99) continue;
+      const double x = v.dot(e1), y = v.dot(e2), rho = std::hypot(x, y);
+      inside += rho < r - 0.05;
+      if (rho > r && rho < r + 1.5)
+        ++around[static_cast<std::size_t>((std::atan2(y, x) + std::numbers::pi) /
+                                          (2 * std::numbers::pi) * 12) %
+                 12];
+    }
+    EXPECT_EQ(inside, 0) << what << ": skin inside the hole";
+    for (std::size_t k = 0; k < around.size(); ++k)
+      EXPECT_GT(around[k], 0) << what << ": no skin in sector " << k << " around it";
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(RealParts, HoleCandidates,
+                         ::testing::ValuesIn(parts::testing::production_parts()),
+                         [](const ::testing::TestParamInfo<std::string>& p) {
+                           std::string name;
+                           for (char ch : p.param)
+                             if (std::isalnum(static_cast<unsigned char>(ch))) name += ch;
+                           return name;
+                         });
+
+// The side panel's four 4.3 x 8 mm slots on each wall, none a round hole.
+TEST(HoleCandidates, SidePanelHasSlotsNotHoles) {
+  const auto& cad = parts::testing::loaded_part("openamr-MMP.00.00.00.003_Side_panel.step");
+  const DatumCandidates c =
+      datum_candidates(cad.shape, describe_faces(cad.shape), cad.model.segmentation);
+  EXPECT_TRUE(c.holes.empty()) << c.holes.size();
+  EXPECT_EQ(c.slots.size(), 16u);
+}
 
 // Parts without slots list none (their half-circle faces are notches or corner reliefs).
 TEST(SlotCandidates, NoneOnPartsWithoutSlots) {
