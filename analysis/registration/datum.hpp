@@ -29,6 +29,9 @@
 // capture_mm (a pad by the dominant skin facing it, a hole or slot by where its outline fits the
 // empty part of the skin's occupancy, then its rim) and the frame solved from those.
 // A hole is measured by what the scan shows: its wall, its rim on the seen skin, or both.
+// When a datum cannot be measured from the best fit, the whole alignment is tried from the best
+// fit turned half round about each of the part's principal axes (a near-symmetric part's best
+// fit may lie turned so); the first from which every datum is measured is the result.
 // A datum whose feature cannot be measured (not in the scan, on the skin it does not see) is
 // never a silent fallback to the best fit: the result says so (`achieved` false, the datum named
 // and why), its frame the best fit, and the caller fails the verdict.
@@ -110,7 +113,8 @@ struct DatumResult {
 
 /// One measure-and-solve round.
 struct DatumRound {
-  std::string stage;      ///< "capture" (wide, coarse), "search" or "narrow" (datum_measure)
+  std::string stage;      ///< "capture" (wide, coarse), "search" or "narrow" (datum_measure);
+                          ///< "half turn" first: the start was the best fit turned half round
   double band_mm = 0.0;   ///< how far off the nominal a feature was looked for
   double moved_mm = 0.0;  ///< the frame's move by the round: its largest at a datum
   double moved_deg = 0.0;
