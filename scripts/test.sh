@@ -36,4 +36,13 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:suppressions=$root/tests/sanitizer/tsan.supp}
-ctest --test-dir "$dir" --output-on-failure --parallel "$(nproc)" --timeout 600 "${select[@]}"
+# Twice as many tests at once as there are cores, but no more computing tests than cores: each
+# takes one of the spec's "cpu" slots (tests/CMakeLists.txt, SPRINGSCAN_COMPUTING_TEST), and the
+# daemon and hardware-in-the-loop tests, which mostly wait, run in the gaps.
+cores=$(nproc)
+spec="$dir/Testing/resources.json"
+mkdir -p "$(dirname "$spec")"
+printf '{"version": {"major": 1, "minor": 0}, "local": [{"cpu": [{"id": "0", "slots": %d}]}]}\n' \
+  "$cores" >"$spec"
+ctest --test-dir "$dir" --output-on-failure --parallel "$((2 * cores))" --resource-spec-file "$spec" \
+  --timeout 600 "${select[@]}"
