@@ -39,10 +39,12 @@ export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:supp
 # Twice as many tests at once as there are cores, but no more computing tests than cores: each
 # takes one of the spec's "cpu" slots (tests/CMakeLists.txt, SPRINGSCAN_COMPUTING_TEST), and the
 # daemon and hardware-in-the-loop tests, which mostly wait, run in the gaps.
+# (At least two slots: the fault campaign takes two, bench/CMakeLists.txt.)
 cores=$(nproc)
+slots=$((cores > 2 ? cores : 2))
 spec="$dir/Testing/resources.json"
 mkdir -p "$(dirname "$spec")"
 printf '{"version": {"major": 1, "minor": 0}, "local": [{"cpu": [{"id": "0", "slots": %d}]}]}\n' \
-  "$cores" >"$spec"
+  "$slots" >"$spec"
 ctest --test-dir "$dir" --output-on-failure --parallel "$((2 * cores))" --resource-spec-file "$spec" \
   --timeout 600 "${select[@]}"
