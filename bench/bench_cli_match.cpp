@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "analysis/preprocess/kcenter.hpp"
+#include "bench/kcenter_centers.hpp"
 #include "simulators/parts/sheet_profile.hpp"
 #include "tests/analysis/profile_sampling.hpp"
 
@@ -41,15 +42,6 @@ using namespace springscan::analysis;
 //                     another order (a perfect part: each point's partner is its nearest one);
 //   surface_<n>_3deg  the scan is the part sprung open by 3 degrees per bend, sampled and reduced
 //                     on its own, with 0.05 mm noise (flange tips displaced by several spacings).
-std::vector<Vec3> kcenter(const std::vector<Vec3>& points, std::size_t n) {
-  KCenterSettings settings;
-  settings.center_count = n;
-  const auto reduced = kcenter_reduce(points, settings);
-  std::vector<Vec3> centers;
-  if (!reduced) return centers;
-  for (const auto i : reduced->centers) centers.push_back(points[i]);
-  return centers;
-}
 
 void write_xyz(const std::string& path, const std::vector<Vec3>& points) {
   std::FILE* f = std::fopen(path.c_str(), "w");
@@ -63,7 +55,8 @@ std::string write_surface_instance(const std::string& dir, std::size_t n, int sp
   ProfileSpec nominal = hat_profile(40.0, 40.0, 60.0, 90.0, 2.0);
   nominal.width_mm = 120.0;
   // 0.5 mm spacing: about 100,000 surface samples, so k-center has 8,192 centers to choose.
-  const auto model = kcenter(testing::sample_profile_spacing(nominal, 0.5).points, n);
+  const auto model =
+      bench::kcenter_centers(testing::sample_profile_spacing(nominal, 0.5).points, n);
   std::vector<Vec3> scan = model;
   std::mt19937 rng(7);
   if (springback_deg == 0) {
@@ -71,7 +64,7 @@ std::string write_surface_instance(const std::string& dir, std::size_t n, int sp
   } else {
     ProfileSpec opened = nominal;
     for (auto& a : opened.bend_angles_deg) a += a > 0 ? -springback_deg : springback_deg;
-    scan = kcenter(testing::sample_profile_spacing(opened, 0.5).points, n);
+    scan = bench::kcenter_centers(testing::sample_profile_spacing(opened, 0.5).points, n);
   }
   std::normal_distribution<double> noise(0.0, 0.05);
   for (auto& p : scan) p += Vec3(noise(rng), noise(rng), noise(rng));

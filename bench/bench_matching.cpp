@@ -18,6 +18,7 @@
 
 #include "analysis/matching/assignment_points.hpp"
 #include "analysis/preprocess/kcenter.hpp"
+#include "bench/kcenter_centers.hpp"
 #include "simulators/parts/sheet_profile.hpp"
 #include "tests/analysis/profile_sampling.hpp"
 #include "tests/analysis/synthetic.hpp"
@@ -25,17 +26,6 @@
 namespace {
 
 using namespace springscan::analysis;
-
-// The pipeline's k-center reduction (paper section 2) to exactly n centers.
-std::vector<Vec3> kcenter(const std::vector<Vec3>& points, std::size_t n) {
-  KCenterSettings settings;
-  settings.center_count = n;
-  const auto reduced = kcenter_reduce(points, settings);
-  std::vector<Vec3> centers;
-  if (!reduced) return centers;
-  for (const auto i : reduced->centers) centers.push_back(points[i]);
-  return centers;
-}
 
 // A hat profile (the paper's part family), its scan bent open by 3 degrees per bend with
 // 0.05 mm noise, both reduced to n centers: the inputs the pipeline hands to the matching.
@@ -61,7 +51,7 @@ Instance surface_instance(std::size_t n, double springback_deg = 3.0) {
   } else {
     std::snprintf(name, sizeof name, "surface_%zu_%gdeg", n, springback_deg);
   }
-  return {name, kcenter(model, n), kcenter(scan, n)};
+  return {name, bench::kcenter_centers(model, n), bench::kcenter_centers(scan, n)};
 }
 
 Instance random_instance(std::size_t n) {

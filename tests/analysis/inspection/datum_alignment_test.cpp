@@ -14,6 +14,7 @@
 #include <random>
 
 #include "analysis/cad/datum_features.hpp"
+#include "tests/analysis/inspection/datum_truth.hpp"
 #include "tests/analysis/matching/field_truth.hpp"
 #include "tests/simulators/parts/production_parts.hpp"
 
@@ -51,17 +52,7 @@ std::vector<Vec3> spread_pads(const PartModel& model, const PadCandidate& root) 
     if (std::sqrt(other_tree.nearest(p)->squared_distance) > 2.0 * kPadRadius) clear.push_back(p);
   EXPECT_GE(clear.size(), 3u);
   if (clear.size() < 3) return {};
-  Vec3 centre = Vec3::Zero();
-  for (const Vec3& p : clear) centre += p;
-  centre /= static_cast<double>(clear.size());
-  const auto farthest = [&](auto score) {
-    return *std::max_element(clear.begin(), clear.end(),
-                             [&](const Vec3& a, const Vec3& b) { return score(a) < score(b); });
-  };
-  const Vec3 a = farthest([&](const Vec3& p) { return (p - centre).norm(); });
-  const Vec3 b = farthest([&](const Vec3& p) { return (p - a).norm(); });
-  const Vec3 c = farthest([&](const Vec3& p) { return (p - a).cross(p - b).norm(); });
-  return {a, b, c};
+  return testing::three_spread_points(clear);
 }
 
 // The laser looks down -z of the part's frame (simulators/parts/laser_scan.hpp): the datums go

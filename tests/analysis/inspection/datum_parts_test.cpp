@@ -196,15 +196,7 @@ Outcome run_case(const OwnPart& p, const parts::CadPart& cad, const View& v, boo
   const double x = shift(rng);
   ls.T_scan_part.translation() = Vec3(x, y, 300.0);
   PointCloud scan;
-  for (std::size_t k = 0; k < v.directions.size(); ++k) {
-    ls.view_direction = R * v.directions[k];
-    ls.seed = seed * 10 + k;
-    auto pass = parts::laser_scan(*part, ls);
-    EXPECT_TRUE(pass) << pass.message();
-    if (!pass) return out;
-    scan.points.insert(scan.points.end(), pass->cloud.points.begin(), pass->cloud.points.end());
-    scan.normals.insert(scan.normals.end(), pass->cloud.normals.begin(), pass->cloud.normals.end());
-  }
+  if (!testing::scan_in_passes(*part, ls, R, v.directions, seed, scan)) return out;
   DatumAlignmentSettings ds;
   ds.datums = datums_of(p);
   v1::AnalysisSettings settings;

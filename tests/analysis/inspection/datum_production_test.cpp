@@ -127,16 +127,7 @@ std::vector<Vec3> spread_pads(const RootSkin& s) {
     if (clear_all_round(p)) clear.push_back(p);
   EXPECT_GE(clear.size(), 3u);
   if (clear.size() < 3) return {};
-  Vec3 centre = Vec3::Zero();
-  for (const Vec3& p : clear) centre += p / static_cast<double>(clear.size());
-  const auto farthest = [&](auto score) {
-    return *std::max_element(clear.begin(), clear.end(),
-                             [&](const Vec3& a, const Vec3& b) { return score(a) < score(b); });
-  };
-  const Vec3 a = farthest([&](const Vec3& p) { return (p - centre).norm(); });
-  const Vec3 b = farthest([&](const Vec3& p) { return (p - a).norm(); });
-  const Vec3 c = farthest([&](const Vec3& p) { return (p - a).cross(p - b).norm(); });
-  return {a, b, c};
+  return testing::three_spread_points(clear);
 }
 
 Datum hole_datum(const std::string& name, const HoleCandidate& h) {
@@ -341,15 +332,7 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
                             R.transpose();  // the flange faces the scanner
   ls.T_scan_part.translation() = Vec3(x, y, 300.0);
   PointCloud scan;
-  for (std::size_t k = 0; k < directions.size(); ++k) {
-    ls.view_direction = R * directions[k];
-    ls.seed = seed * 10 + k;
-    auto pass = parts::laser_scan(*part, ls);
-    EXPECT_TRUE(pass) << pass.message();
-    if (!pass) return out;
-    scan.points.insert(scan.points.end(), pass->cloud.points.begin(), pass->cloud.points.end());
-    scan.normals.insert(scan.normals.end(), pass->cloud.normals.begin(), pass->cloud.normals.end());
-  }
+  if (!testing::scan_in_passes(*part, ls, R, directions, seed, scan)) return out;
   DatumAlignmentSettings ds;
   ds.datums = cd.datums;
   v1::AnalysisSettings settings;

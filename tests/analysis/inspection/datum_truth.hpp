@@ -3,6 +3,8 @@
 // a result frame is from the constructed one, and the frame's noise floor from what the report
 // says it measured.
 
+#include <gtest/gtest.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -13,8 +15,42 @@
 
 #include "analysis/registration/datum.hpp"
 #include "proto/springscan.pb.h"
+#include "simulators/parts/laser_scan.hpp"
 
 namespace springscan::analysis::testing {
+
+// Three pad points spread over `clear` (at least three candidates): the farthest from their
+// centre, the farthest from that one, and the one that makes the largest triangle with both.
+inline std::vector<Vec3> three_spread_points(const std::vector<Vec3>& clear) {
+  Vec3 centre = Vec3::Zero();
+  for (const Vec3& p : clear) centre += p / static_cast<double>(clear.size());
+  const auto farthest = [&](auto score) {
+    return *std::max_element(clear.begin(), clear.end(),
+                             [&](const Vec3& a, const Vec3& b) { return score(a) < score(b); });
+  };
+  const Vec3 a = farthest([&](const Vec3& p) { return (p - centre).norm(); });
+  const Vec3 b = farthest([&](const Vec3& p) { return (p - a).norm(); });
+  const Vec3 c = farthest([&](const Vec3& p) { return (p - a).cross(p - b).norm(); });
+  return {a, b, c};
+}
+
+// The part scanned in one laser pass per view direction (`directions` in the part's frame,
+// turned by R as the part lies), pass k with seed `seed` x 10 + k, the passes merged with their
+// normals. False (and a test failure) when a pass fails.
+inline bool scan_in_passes(const parts::ProducedPart& part, parts::LaserScanSettings ls,
+                           const Mat3& R, const std::vector<Vec3>& directions, std::uint64_t seed,
+                           PointCloud& scan) {
+  for (std::size_t k = 0; k < directions.size(); ++k) {
+    ls.view_direction = R * directions[k];
+    ls.seed = seed * 10 + k;
+    auto pass = parts::laser_scan(part, ls);
+    EXPECT_TRUE(pass) << pass.message();
+    if (!pass) return false;
+    scan.points.insert(scan.points.end(), pass->cloud.points.begin(), pass->cloud.points.end());
+    scan.normals.insert(scan.normals.end(), pass->cloud.normals.begin(), pass->cloud.normals.end());
+  }
+  return true;
+}
 
 // The frame's noise floor from the report: each datum's fixed directions with the standard error
 // of its measurement (a pad's plane at its centre: rms / sqrt(n); a hole's centre: rms x
