@@ -27,6 +27,26 @@ double rotation_apart_deg(const Transform& a, const Transform& b) {
   return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle() / kRadPerDeg;
 }
 
+// A symmetric model fits the best orientation and the ones equivalent to it equally well: which
+// of them scored lowest then depends on the points sampled, i.e. on the scan's point order (the
+// demo hat, reversed, came out half turned with its bends numbered from the other end). The
+// answer among them is the one nearest the nominal pose, the identity (the fixture holds the part
+// near its CAD placement), ties to the lower index: the same for any point order, and the bends
+// keep their CAD numbering (docs/alignment.md).
+void take_nearest_nominal(OrientationChoice& choice) {
+  auto& cs = choice.candidates;
+  const auto from_nominal = [&](std::size_t i) {
+    return rotation_apart_deg(cs[i].T_cad_scan, Transform::Identity());
+  };
+  std::size_t nominal = choice.best;
+  for (std::size_t i = 0; i < cs.size(); ++i)
+    if (cs[i].equivalent && from_nominal(i) < from_nominal(nominal)) nominal = i;
+  if (nominal == choice.best) return;
+  cs[choice.best].equivalent = true;  // the same answer as the one taken
+  cs[nominal].equivalent = false;
+  choice.best = nominal;
+}
+
 }  // namespace
 
 double model_sample_spacing(const KdTree& model_tree) {
@@ -201,7 +221,9 @@ Expected<OrientationChoice> choose_orientation(
     }
     second = std::min(second, cs[i].score_mm2);
   }
-  choice.ambiguity = std::isfinite(second) && second > 0.0 ? best.score_mm2 / second : 0.0;
+  if (choice.symmetric_model) take_nearest_nominal(choice);
+  const double best_score = cs[choice.best].score_mm2;
+  choice.ambiguity = std::isfinite(second) && second > 0.0 ? best_score / second : 0.0;
   if (std::isfinite(second) && second <= 0.0) choice.ambiguity = 1.0;
   choice.ambiguous = choice.ambiguity > settings.ambiguous_error_ratio;
   return choice;

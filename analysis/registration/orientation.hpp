@@ -89,7 +89,8 @@ struct OrientationCandidate {
 
 struct OrientationChoice {
   std::vector<OrientationCandidate> candidates;  ///< as given, refined and scored
-  std::size_t best = 0;                          ///< index of the lowest score (lowest on ties)
+  std::size_t best = 0;    ///< index of the lowest score (lowest on ties); on a symmetric model,
+                           ///< of the one nearest the identity among it and its equivalents
   double ambiguity = 0.0;  ///< best score / the next distinct, non-equivalent orientation's
                            ///< (0 when there is none): near 1 = the scan cannot tell them apart
   bool ambiguous = false;  ///< ambiguity > ambiguous_error_ratio
