@@ -142,6 +142,41 @@ TEST(Orientation, IndistinguishableOrientationsAreAmbiguous) {
   EXPECT_FALSE(same->ambiguous);
 }
 
+// A symmetric model fits an orientation and its turned copy equally well; which scored lowest
+// followed the scan's point order (the demo hat, reversed, came out half turned, its bends
+// numbered from the other end). The answer is the one nearest the nominal pose (identity),
+// whatever order the candidates come in.
+TEST(Orientation, SymmetricModelTakesTheOrientationNearestNominal) {
+  std::vector<Vec3> plate;
+  for (double x = 0; x <= 120; x += 0.5)
+    for (double y = 0; y <= 60; y += 0.5) plate.emplace_back(x, y, 0.0);
+  const std::vector<Vec3> normals(plate.size(), Vec3::UnitZ());
+  const KdTree tree(plate);
+  // The scan: the plate 20 degrees off the nominal pose about z (a part placed a little askew).
+  Transform placed = Transform::Identity();
+  placed.linear() = Eigen::AngleAxisd(20.0 * kDeg, Vec3::UnitZ()).toRotationMatrix();
+  placed.translation() = Vec3(5, -3, 2);
+  std::vector<Vec3> scan;
+  for (const Vec3& p : plate) scan.push_back(placed * p);
+  const Transform right = placed.inverse();  // 20 degrees from identity
+  Transform turned = Transform::Identity();  // the plate turned end for end onto itself
+  turned.linear() = Eigen::AngleAxisd(std::numbers::pi, Vec3::UnitZ()).toRotationMatrix();
+  turned.translation() = Vec3(120, 60, 0);
+  IcpSettings icp;
+  icp.max_iterations = 5;
+  for (const auto& starts : {std::vector<Transform>{turned * right, right},
+                             std::vector<Transform>{right, turned * right}}) {
+    auto choice = choose_orientation(scan, tree, normals, starts, {}, icp, 1);
+    ASSERT_TRUE(choice) << choice.message();
+    EXPECT_TRUE(choice->symmetric_model);
+    EXPECT_FALSE(choice->ambiguous);
+    const Transform& best = choice->candidates[choice->best].T_cad_scan;
+    EXPECT_LT(rotation_error_deg(best, right), 0.01);
+    EXPECT_FALSE(choice->candidates[choice->best].equivalent);
+    EXPECT_TRUE(choice->candidates[1 - choice->best].equivalent);
+  }
+}
+
 TEST(Orientation, ErrorsAndTinyInputs) {
   const KdTree tree(std::vector<Vec3>{Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0)});
   EXPECT_FALSE(choose_orientation({Vec3(0, 0, 0)}, tree, {}, {}, {}, {}));
