@@ -78,10 +78,8 @@ bool radix_pass(const std::vector<Keyed>& from, std::vector<Keyed>& to, int shif
   return true;
 }
 
-}  // namespace
-
-std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
-  if (points.empty()) return {};
+// The points keyed by the Morton code of their cell, sorted stably by it.
+std::vector<Keyed> morton_sorted(const std::vector<Vec3>& points, int threads) {
   const std::pair<Vec3, Vec3> bounds = box(points, threads);  // (clang: no captured bindings)
   const Vec3 lo = bounds.first, hi = bounds.second;
   const double extent = (hi - lo).maxCoeff();
@@ -98,11 +96,47 @@ std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int th
   });
   for (int shift = 0; shift < 3 * kSpatialOrderBits; shift += kDigitBits)
     if (radix_pass(keyed, other, shift, threads)) keyed.swap(other);
-  std::vector<std::uint32_t> order(points.size());
-  parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+  return keyed;
+}
+
+std::vector<std::uint32_t> indices_of(const std::vector<Keyed>& keyed, int threads) {
+  std::vector<std::uint32_t> order(keyed.size());
+  parallel_blocks(keyed.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) order[i] = keyed[i].index;
   });
   return order;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
+  if (points.empty()) return {};
+  return indices_of(morton_sorted(points, threads), threads);
+}
+
+std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads) {
+  if (points.empty()) return {};
+  std::vector<Keyed> keyed = morton_sorted(points, threads);
+  const auto by_coordinates = [&points](const Keyed& a, const Keyed& b) {
+    const Vec3 &p = points[a.index], &q = points[b.index];
+    if (p.x() != q.x()) return p.x() < q.x();
+    if (p.y() != q.y()) return p.y() < q.y();
+    return p.z() < q.z();
+  };
+  // Each block sorts the cells (runs of one key) that start in it, to their end.
+  parallel_blocks(keyed.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    std::size_t run = begin;
+    while (run > 0 && run < keyed.size() && keyed[run].key == keyed[run - 1].key) ++run;
+    while (run < end) {
+      std::size_t next = run + 1;
+      while (next < keyed.size() && keyed[next].key == keyed[run].key) ++next;
+      if (next - run > 1)
+        std::stable_sort(keyed.begin() + static_cast<std::ptrdiff_t>(run),
+                         keyed.begin() + static_cast<std::ptrdiff_t>(next), by_coordinates);
+      run = next;
+    }
+  });
+  return indices_of(keyed, threads);
 }
 
 bool spatially_coherent(const std::vector<Vec3>& points) {

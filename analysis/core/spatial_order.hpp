@@ -28,6 +28,14 @@ inline constexpr int kSpatialOrderBits = 9;
 /// on the thread count. Points must be finite. Thread safety: a pure function.
 std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads = 0);
 
+/// spatial_order with the points of one cell by their coordinates (x, then y, then z) instead of
+/// their input order: a permutation that depends on the point set alone, not on the order it
+/// came in (points with equal coordinates keep their input order; they are the same point).
+/// The analysis takes its scan in this order once (analysis/inspection/pipeline.cpp), so that
+/// its index-based samples draw the same points, and the same report comes out, whatever order
+/// the scan came in. Thread safety: a pure function; the result does not depend on `threads`.
+std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads = 0);
+
 /// True when the points are in a spatially coherent order already (a scan in scanner lines, a
 /// grid-sorted one): the median distance between consecutive points, over up to 1024 pairs
 /// spread evenly, is below 1 % of the diagonal of those pairs' bounding box. A search loop then

@@ -9,6 +9,7 @@
 
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
+#include "analysis/core/spatial_order.hpp"
 #include "analysis/deviation/deviation.hpp"
 #include "analysis/inspection/verdict.hpp"
 #include "analysis/matching/compensation.hpp"
@@ -435,22 +436,34 @@ void start_report(const PipelineSettings& config, const v1::AnalysisSettings& se
   input.set_cad_sha256(model.source_sha256);
 }
 
+// `ordered`'s points (ordered[k] is the scan's point order[k]) back in the scan's order.
+PointCloud in_input_order(const PointCloud& ordered, const std::vector<std::uint32_t>& order) {
+  std::vector<std::uint32_t> where(order.size());
+  for (std::size_t k = 0; k < order.size(); ++k) where[order[k]] = static_cast<std::uint32_t>(k);
+  return select(ordered, where);
+}
+
 }  // namespace
 
 // Some 70 lines on purpose: the stages in the paper's order, each a call, its report section
 // and its time; split, the data flow from one stage to the next would no longer read in one place.
-Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& scan,
+Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCloud& input_scan,
                                            const v1::AnalysisSettings& settings) {
   const auto start = Clock::now();
   auto config = load_settings(settings);
   if (!config) return config.error();
   InspectionOutcome out;
   v1::InspectionReport& report = out.report;
-  start_report(*config, settings, model, scan, report);
-  if (auto error = check_inputs(model, scan, report)) return *error;
+  start_report(*config, settings, model, input_scan, report);
+  if (auto error = check_inputs(model, input_scan, report)) return *error;
   auto& timings = *report.mutable_timings_ms();
 
   auto t = Clock::now();
+  // The scan in one space order whatever order it came in (issue 37; its time counts in the
+  // reduce's): the stages sample it by index, so the same points give the same report from a
+  // file, a merged multi-head scan or a scanner's lines, and every search runs in space order.
+  const std::vector<std::uint32_t> scan_order = canonical_order(input_scan.points, config->threads);
+  const PointCloud scan = select(input_scan, scan_order);
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);
   if (!reduced) return reduced.error();
@@ -582,6 +595,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
                                           "; the results are in the best-fit frame");
   }
 
+  out.deviation_cloud = in_input_order(out.deviation_cloud, scan_order);
   timings.set_total(ms_since(start));
   return out;
 }

@@ -1,8 +1,9 @@
-// The same scan in another point order is the same part (issue 37): a file's order, reversed, shuffled
-// (a merged multi-head scan) or in space order. The demo hat is symmetric under a half turn, and
-// its fitted orientation followed the sampled points, i.e. the order: reversed, its bends came out
-// numbered from the other end. Truth: the demo's pose and springback per bend
-// (simulators/demo_part_main.cpp).
+// The same scan in another point order is the same part (issue 37): a file's order, reversed,
+// shuffled (a merged multi-head scan) or in space order give the same report (the analysis takes
+// the scan in one space order, analysis/core/spatial_order.hpp canonical_order). The demo hat is
+// symmetric under a half turn, and its fitted orientation followed the sampled points, i.e. the
+// order: reversed, its bends came out numbered from the other end. Truth: the demo's pose and
+// springback per bend (simulators/demo_part_main.cpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -84,21 +85,40 @@ TEST(PointOrder, DemoHatKeepsItsOrientationAndBendsInEveryOrder) {
   const auto apart_deg = [](const Transform& a, const Transform& b) {
     return Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle() / kDeg;
   };
-  std::optional<Transform> first;
+  std::optional<v1::InspectionReport> first;
+  PointCloud first_cloud;  // the file order's deviation cloud
   for (const auto& [name, order] : orders) {
-    auto out = run_inspection(*model, reordered(*scan, order));
+    const PointCloud input = reordered(*scan, order);
+    auto out = run_inspection(*model, input);
     ASSERT_TRUE(out) << name << ": " << out.message();
     const v1::InspectionReport& r = out->report;
     const Transform T = report_transform(r.global_fit());
     // The best fit of the sprung part lies half a degree off its pose; a half turn 180 degrees.
     EXPECT_LT(apart_deg(T, truth), 2.0) << name;
-    if (!first) first = T;
-    EXPECT_LT(apart_deg(T, *first), 0.02) << name;
     EXPECT_FALSE(r.global_fit().ambiguous()) << name;
     ASSERT_EQ(r.bends_size(), 4) << name;
     for (int b = 0; b < 4; ++b)
       EXPECT_NEAR(r.bends(b).springback_deg(), kSpringbackDeg[static_cast<std::size_t>(b)], 0.05)
           << name << " bend " << b;
+    // The scan is taken in one space order whatever order it came in: the same report.
+    if (!first) first = r;
+    EXPECT_LT(apart_deg(T, report_transform(first->global_fit())), 1e-9) << name;
+    EXPECT_LT((T.translation() - report_transform(first->global_fit()).translation()).norm(), 1e-9)
+        << name;
+    EXPECT_NEAR(r.global_fit().rms_residual(), first->global_fit().rms_residual(), 1e-9) << name;
+    EXPECT_NEAR(r.deviation().p95(), first->deviation().p95(), 1e-9) << name;
+    for (int b = 0; b < 4; ++b)
+      EXPECT_NEAR(r.bends(b).springback_deg(), first->bends(b).springback_deg(), 1e-6)
+          << name << " bend " << b;
+    // deviation.ply keeps the order the scan came in: its point i is the file's point order[i].
+    ASSERT_EQ(out->deviation_cloud.size(), input.size());
+    if (first_cloud.empty()) first_cloud = out->deviation_cloud;
+    for (std::size_t i = 0; i < input.size(); i += 997) {
+      EXPECT_LT((out->deviation_cloud.points[i] - first_cloud.points[order[i]]).norm(), 1e-9)
+          << name << " point " << i;
+      EXPECT_NEAR(out->deviation_cloud.scalars[i], first_cloud.scalars[order[i]], 1e-9)
+          << name << " point " << i;
+    }
   }
 }
 
