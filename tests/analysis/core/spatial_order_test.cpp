@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <numeric>
 #include <random>
+#include <tuple>
 
 namespace springscan::analysis {
 namespace {
@@ -101,6 +102,43 @@ TEST(SpatialOrder, CoherenceOfScanLinesAndOfAShuffle) {
   EXPECT_EQ(search_order(points), identity);
   EXPECT_TRUE(spatially_coherent({}));
   EXPECT_TRUE(spatially_coherent({Vec3(1, 2, 3)}));
+}
+
+// The analysis takes its scan in canonical_order (issue 37): the same point set in any order
+// gives the same sequence of points, on any thread count, and it is a Morton order.
+TEST(SpatialOrder, CanonicalOrderDependsOnThePointsAlone) {
+  // Several parallel blocks, and repeated cells (every third point rounded to the millimetre).
+  std::vector<Vec3> points = shuffled_sheet(30'000, 4);
+  for (std::size_t i = 0; i < points.size(); i += 3) points[i] = points[i].array().round();
+  const auto in_order = [](const std::vector<Vec3>& from, const std::vector<std::uint32_t>& o) {
+    std::vector<Vec3> out;
+    for (const std::uint32_t i : o) out.push_back(from[i]);
+    return out;
+  };
+  const std::vector<Vec3> canonical = in_order(points, canonical_order(points, 1));
+  std::vector<Vec3> other = points;
+  std::reverse(other.begin(), other.end());
+  std::mt19937 rng(5);
+  EXPECT_EQ(in_order(other, canonical_order(other, 2)), canonical);
+  std::shuffle(other.begin(), other.end(), rng);
+  EXPECT_EQ(in_order(other, canonical_order(other, 1)), canonical);
+  EXPECT_EQ(in_order(other, canonical_order(other, 2)), canonical);
+  // The cells in Morton order (the oracle's stable sort), points within a cell by coordinates.
+  const std::vector<Vec3> by_cell = in_order(points, by_sorting(points));
+  ASSERT_EQ(by_cell.size(), canonical.size());
+  std::vector<Vec3> cells_of_canonical = canonical, cells_of_oracle = by_cell;
+  const auto lexicographic = [](const Vec3& a, const Vec3& b) {
+    return std::tie(a.x(), a.y(), a.z()) < std::tie(b.x(), b.y(), b.z());
+  };
+  std::sort(cells_of_canonical.begin(), cells_of_canonical.end(), lexicographic);
+  std::sort(cells_of_oracle.begin(), cells_of_oracle.end(), lexicographic);
+  EXPECT_EQ(cells_of_canonical, cells_of_oracle);  // the same points
+  EXPECT_EQ(spatial_order(canonical, 1), by_sorting(canonical));
+  std::vector<std::uint32_t> identity(canonical.size());
+  std::iota(identity.begin(), identity.end(), 0u);
+  // Already canonical: a stable sort by cell leaves it as it is.
+  EXPECT_EQ(by_sorting(canonical), identity);
+  EXPECT_TRUE(canonical_order({}).empty());
 }
 
 }  // namespace
