@@ -40,10 +40,11 @@ def run_once(model, scan, voxel, threshold):
 
 
 def springscan_global_stages(bench, folder, repetitions):
-    """Runs BM_Inspection1MScan100kModel (it writes the data to `folder` first) and returns the
-    medians of its wall time and of reduce + fit + deviation (the global stages), ms."""
+    """Runs BM_Inspection1MScan100kModel on 2 threads (it writes the data to `folder` first) and
+    returns the medians of its wall time, process CPU and reduce + fit + deviation (the global
+    stages), ms."""
     env = dict(os.environ, SPRINGSCAN_BENCH_DATA_DIR=folder)
-    out = subprocess.run([bench, "--benchmark_filter=BM_Inspection1MScan100kModel$",
+    out = subprocess.run([bench, "--benchmark_filter=^BM_Inspection1MScan100kModel/2/",
                           f"--benchmark_repetitions={repetitions}", "--benchmark_format=json"],
                          env=env, check=True, capture_output=True, text=True).stdout
     runs = [b for b in json.loads(out)["benchmarks"] if b.get("run_type") == "iteration"]
