@@ -116,27 +116,42 @@ std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int th
 
 std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads) {
   if (points.empty()) return {};
-  std::vector<Keyed> keyed = morton_sorted(points, threads);
-  const auto by_coordinates = [&points](const Keyed& a, const Keyed& b) {
-    const Vec3 &p = points[a.index], &q = points[b.index];
-    if (p.x() != q.x()) return p.x() < q.x();
-    if (p.y() != q.y()) return p.y() < q.y();
-    return p.z() < q.z();
+  const std::vector<Keyed> keyed = morton_sorted(points, threads);
+  // The points copied in cell order, so that sorting a cell reads neighbouring memory (its
+  // points' coordinates read through their input indices missed the cache on every compare).
+  struct Entry {
+    Vec3 point;
+    std::uint32_t key;
+    std::uint32_t index;
+  };
+  std::vector<Entry> entries(keyed.size());
+  parallel_blocks(keyed.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k)
+      entries[k] = {points[keyed[k].index], keyed[k].key, keyed[k].index};
+  });
+  // Within a cell by coordinates; equal points (the same point) by input index, as the stable
+  // sort by cell left them.
+  const auto by_coordinates = [](const Entry& a, const Entry& b) {
+    if (a.point.x() != b.point.x()) return a.point.x() < b.point.x();
+    if (a.point.y() != b.point.y()) return a.point.y() < b.point.y();
+    if (a.point.z() != b.point.z()) return a.point.z() < b.point.z();
+    return a.index < b.index;
   };
   // Each block sorts the cells (runs of one key) that start in it, to their end.
-  parallel_blocks(keyed.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+  std::vector<std::uint32_t> order(entries.size());
+  parallel_blocks(entries.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::size_t run = begin;
-    while (run > 0 && run < keyed.size() && keyed[run].key == keyed[run - 1].key) ++run;
+    while (run > 0 && run < entries.size() && entries[run].key == entries[run - 1].key) ++run;
     while (run < end) {
       std::size_t next = run + 1;
-      while (next < keyed.size() && keyed[next].key == keyed[run].key) ++next;
-      if (next - run > 1)
-        std::stable_sort(keyed.begin() + static_cast<std::ptrdiff_t>(run),
-                         keyed.begin() + static_cast<std::ptrdiff_t>(next), by_coordinates);
+      while (next < entries.size() && entries[next].key == entries[run].key) ++next;
+      const auto first = entries.begin() + static_cast<std::ptrdiff_t>(run);
+      std::sort(first, entries.begin() + static_cast<std::ptrdiff_t>(next), by_coordinates);
+      for (std::size_t k = run; k < next; ++k) order[k] = entries[k].index;
       run = next;
     }
   });
-  return indices_of(keyed, threads);
+  return order;
 }
 
 bool spatially_coherent(const std::vector<Vec3>& points) {
