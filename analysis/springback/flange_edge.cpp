@@ -184,6 +184,7 @@ struct EdgeInput {
   const std::vector<Vec2>& samples;  // the scanned skin's model samples, flange (s, t)
   const std::vector<Vec2>& near;     // scan points on the fitted surface near the outline
   const FlangeEdgeSettings& st;
+  bool solid = false;  // the flange has both sides of a sheet (a solid model)
 };
 
 // The CAD edge at each strip's centre: the closest surface point to a point in the plane 1 mm
@@ -209,12 +210,14 @@ bool locate_cad_edge(const EdgeInput& in, const EdgeLine& line, std::vector<Stri
     const SurfaceHit hit =
         in.model.distance->closest(frame.origin + q.x() * frame.u + q.y() * frame.d);
     if (on_a_bend(in.model.segmentation, hit.face_id)) return false;
-    // The query point inside the solid (the foot on a wall that rises from the skin there, a
-    // rib or a gusset): an inside corner, where the surface turns, not where the sheet ends.
-    // Beyond a trim edge it lies outside (a solid's end face) or level with the sheet (a
-    // surface model's free boundary).
+    // On a solid, the query point inside the material (behind the foot's face: a wall that
+    // rises from the skin there, a rib, a gusset) is an inside corner, where the surface turns,
+    // not where the sheet ends; beyond a trim edge it lies outside, in front of the end face.
+    // (A surface model has no inside: its free boundary's foot may lie off the query point's
+    // height on a sprung flange, either side.)
     const Vec3 query = frame.origin + q.x() * frame.u + q.y() * frame.d;
-    if (hit.signed_distance_mm < -0.5 * (hit.foot - query).norm()) return false;
+    if (in.solid && (query - hit.foot).dot(hit.normal) < -0.5 * (query - hit.foot).norm())
+      return false;
     const Vec3 foot = frame.local(hit.foot);
     strip.cad_s = line.out.dot(Vec2(foot.x(), foot.y()));
     strip.cad_h = foot.z();
@@ -342,7 +345,7 @@ std::vector<EdgeDeviation> measure_trim_edges(const PartModel& model, const Flan
       straight_runs(convex_hull(samples), corner, std::max(st.min_edge_length_mm, 1e-9));
   if (runs.empty()) return edges;
   const std::vector<Vec2> near = points_near_outline(shape, samples, scan, points, st.band_mm);
-  const EdgeInput in{model, shape, samples, near, st};
+  const EdgeInput in{model, shape, samples, near, st, flange.thickness_mm > 0.0};
   for (const Run& run : runs) {
     EdgeLine line;
     line.along = (run.end - run.start).normalized();

@@ -105,5 +105,44 @@ TEST(SpringbackCad, FreeEdgesOfASolidSheet) {
   EXPECT_GE(side_edges, 8) << "two on each of five flanges";
 }
 
+// A few lone readings beyond a free edge on the flange's own surface (outliers along a grazing
+// ray that stay within its inlier band): the edge is the sheet's, not carried out to them.
+TEST(SpringbackCad, LoneReadingsBeyondAnEdgeAreNotTheEdge) {
+  ProfileSpec spec = hat_profile(25, 30, 40, 85, 4);
+  spec.thickness_mm = 1.5;
+  spec.width_mm = 80;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "springscan_edge_outlier_hat.brep").string();
+  ASSERT_TRUE(write_profile_cad(spec, path));
+  const auto model = load_part_model(path);
+  ASSERT_TRUE(model.ok()) << model.message();
+  auto scan = simulate_shaped_scan(spec, ProfileShape{}, {.point_count = 60000});
+  ASSERT_TRUE(scan.ok());
+  const auto clean = measure_springback(*model, *scan);
+  ASSERT_TRUE(clean.ok()) << clean.message();
+  // Beyond each free edge, 1.5-2.5 mm out in plane (3-5 of this scan's point spacings, about
+  // 0.46 mm), one reading per strip.
+  int free_edges = 0;
+  for (const FlangeFit& f : clean->flanges)
+    if (const EdgeDeviation* e = f.free_edge()) {
+      ++free_edges;
+      for (std::size_t k = 0; k < e->scan_edge.size(); ++k) {
+        scan->points.push_back(e->scan_edge[k] + (1.5 + 0.5 * static_cast<double>(k)) * e->outward);
+        if (scan->has_normals()) scan->normals.push_back(scan->normals.front());
+      }
+    }
+  ASSERT_EQ(free_edges, 2);
+  const auto result = measure_springback(*model, *scan);
+  ASSERT_TRUE(result.ok()) << result.message();
+  int edges = 0;
+  for (const FlangeFit& f : result->flanges)
+    if (const EdgeDeviation* e = f.free_edge()) {
+      ++edges;
+      EXPECT_NEAR(e->in_plane_min_mm, 0.0, 0.05) << "flange " << f.flange_id;
+      EXPECT_NEAR(e->in_plane_max_mm, 0.0, 0.05) << "flange " << f.flange_id;
+    }
+  EXPECT_EQ(edges, 2);
+}
+
 }  // namespace
 }  // namespace springscan::analysis
