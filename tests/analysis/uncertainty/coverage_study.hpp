@@ -290,14 +290,8 @@ inline void run_production_case(const std::string& part, double noise_mm, Produc
         const Vec3 m(e.scan_edge(k).x(), e.scan_edge(k).y(), e.scan_edge(k).z());
         const int face = cad.model.samples.face_ids[samples.nearest(c)->index];
         const Vec3 truth = run.T_truth_part * produced->produced(c, face);
-        char dbg[200];
-        std::snprintf(
-            dbg, sizeof dbg,
-            " DBG seg %d k %d face %d kind %s m-c %+.3f t-c %+.3f across m-c %+.3f t-c %+.3f",
-            seg.id(), k, face, e.kind().c_str(), (m - c).dot(outward), (truth - c).dot(outward),
-            (m - c).dot(normal), (truth - c).dot(normal));
         out.push_back(
-            {"edge in plane", family, (m - truth).dot(outward), e.uncertainty_mm(), note + dbg});
+            {"edge in plane", family, (m - truth).dot(outward), e.uncertainty_mm(), note});
         out.push_back({"edge across", family, (m - truth).dot(normal), e.uncertainty_mm(), note});
       }
     }
