@@ -24,8 +24,6 @@ constexpr int kRobustRounds = 4;
 constexpr double kNone = std::numeric_limits<double>::infinity();  // no point in a stretch
 constexpr std::size_t kRimSectors = 24;  // a hole's rim: sectors of 15 deg
 constexpr double kRimReachMm = 3.0;      // the skin around a rim is gathered this far out
-constexpr double kRimStretchMm = 2.0;    // a slot's straight rims: stretches this long
-constexpr int kRimStretches = 3;         // ... at least this many per edge
 
 // A skin's band never reaches the sheet's other skin.
 double skin_band_of(const Datum& d, double band_mm) {
@@ -356,26 +354,20 @@ std::string arc_text(const std::string& seen, const CircleFit& c, int need, cons
   if (!c.fitted) return c.failure;
   if (std::abs(2.0 * c.circle.radius - d.diameter_mm) >
       std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm))
-    return "its " + seen + "'s circle is " + std::to_string(2.0 * c.circle.radius) +
-           " mm across (the hole " + std::to_string(d.diameter_mm) + ")";
+    return "its " + seen + "'s " + (d.kind == DatumKind::kSlot ? "outline" : "circle") + " is " +
+           std::to_string(2.0 * c.circle.radius) + " mm across (the " + to_string(d.kind) + " " +
+           std::to_string(d.diameter_mm) + ")";
   return "its " + seen + " is seen over " + std::to_string(30 * c.sectors) + " deg only (needs " +
          std::to_string(30 * need) + ")";
 }
 
-// The hole by what the scan shows of it: its wall where seen over min_hole_sectors, its rim on
-// the seen skin where that is, both weighted by the information of their centres where both are
-// (a wall of a one-sided view, seen over part of its circle, fixes the centre along the arc's
+// The feature from its wall's and its rim's fits (circles, or a slot's stadiums; centres in
+// (e1, e2)): the wall where seen over min_hole_sectors, the rim on the seen skin where that is
+// seen over kRimSectorsNeeded, both weighted by the information of their centres where both are
+// (a wall of a one-sided view, seen over part of its outline, fixes the centre along the arc's
 // middle; the rim across it).
-FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band, double skin_band,
-                        const DatumAlignmentSettings& s) {
-  Vec3 e1, e2;
-  complete_basis(d.normal, e1, e2);
-  CircleFit wall;
-  if (d.thickness_mm > 0.0) wall = robust_circle(wall_points(d, near, band, e1, e2), "wall", s);
-  double spacing = 0.0;
-  const double gap = rim_gap(d, near, skin_band, spacing);
-  const CircleFit rim =
-      robust_circle(rim_points(d, near, skin_band, gap, spacing, e1, e2), "rim", s);
+FeatureFit by_what_is_seen(const Datum& d, const CircleFit& wall, const CircleFit& rim,
+                           const DatumAlignmentSettings& s, const Vec3& e1, const Vec3& e2) {
   const auto size_ok = [&](const CircleFit& c) {
     return std::abs(2.0 * c.circle.radius - d.diameter_mm) <=
            std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm);
@@ -397,130 +389,225 @@ FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band, 
   if (rim_whole)
     return from_circle(d, rim.circle.centre, 2.0 * rim.circle.radius, rim, e1, e2, "rim");
   FeatureFit f;
-  f.failure = d.thickness_mm > 0.0 ? arc_text("wall", wall, s.min_hole_sectors, d) + "; " +
-                                         arc_text("rim", rim, rim_need, d)
-                                   : arc_text("rim", rim, rim_need, d);
+  f.failure = wall.fitted || !wall.failure.empty()
+                  ? arc_text("wall", wall, s.min_hole_sectors, d) + "; " +
+                        arc_text("rim", rim, rim_need, d)
+                  : arc_text("rim", rim, rim_need, d);
   return f;
 }
 
-// ---- slot: the mid-plane of its two straight edges (walls or rims) ----------------------------
-
-// A robust mean of `u` (the median, then the mean within outlier_sigmas); its variance of the
-// mean in `var`, the points kept in `n`.
-double robust_mean(const std::vector<double>& u, const DatumAlignmentSettings& s, double& var,
-                   std::size_t& n) {
-  std::vector<double> sorted = u;
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
-                   sorted.end());
-  const double median = sorted[sorted.size() / 2];
-  std::vector<double> r(u.size());
-  for (std::size_t i = 0; i < u.size(); ++i) r[i] = u[i] - median;
-  const auto keep = inliers_of(r, s.outlier_sigmas);
-  double sum = 0.0, sum2 = 0.0;
-  n = 0;
-  for (std::size_t i = 0; i < u.size(); ++i)
-    if (keep[i]) sum += u[i], sum2 += u[i] * u[i], ++n;
-  const double mean = sum / static_cast<double>(n);
-  const double spread = std::max(sum2 / static_cast<double>(n) - mean * mean, 1e-6);
-  var = spread / static_cast<double>(n);
-  return mean;
-}
-
-struct SlotEdges {
-  bool measured = false;
-  double mid = 0.0, width = 0.0, rms = 0.0;
-  std::size_t points = 0;
-  std::string failure;
-};
-
-SlotEdges slot_edges(std::array<std::vector<double>, 2>& side, const std::string& seen,
-                     std::size_t need, const DatumAlignmentSettings& s) {
-  SlotEdges e;
-  double position[2], var[2];
-  for (int k = 0; k < 2; ++k) {
-    auto& u = side[static_cast<std::size_t>(k)];
-    if (u.size() < need) {
-      e.failure =
-          too_few(u.size(), std::string("on the slot's ") + (k ? "+ " : "- ") + seen, need).failure;
-      return e;
-    }
-    std::size_t n = 0;
-    position[k] = robust_mean(u, s, var[k], n);
-    e.points += n;
-    e.rms += var[k] * static_cast<double>(n);
-  }
-  e.measured = true;
-  e.mid = 0.5 * (position[0] + position[1]);
-  e.width = position[1] - position[0];
-  e.rms = std::sqrt(e.rms / static_cast<double>(e.points));
-  return e;
-}
-
-// The straight walls' across-positions, and per bin along the slot (a point spacing) on each side
-// the innermost point of the seen skin within [w/2 - band, w/2 + band + gap]: the rims.
-FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, double skin_band,
-                        const DatumAlignmentSettings& s, bool walls_too = true) {
-  const Vec3 along = d.normal.cross(d.direction);
-  const double half_width = 0.5 * d.diameter_mm;
-  const double straight = 0.5 * (d.length_mm - d.diameter_mm);  // the walls' half length
+// The hole by what the scan shows of it (by_what_is_seen).
+FeatureFit measure_hole(const Datum& d, const FeaturePoints& near, double band, double skin_band,
+                        const DatumAlignmentSettings& s) {
+  Vec3 e1, e2;
+  complete_basis(d.normal, e1, e2);
+  CircleFit wall;
+  if (d.thickness_mm > 0.0) wall = robust_circle(wall_points(d, near, band, e1, e2), "wall", s);
   double spacing = 0.0;
   const double gap = rim_gap(d, near, skin_band, spacing);
-  // Long stretches (the innermost point's gap shrinks with the stretch), at least kRimStretches.
-  const int bins = std::max(kRimStretches, static_cast<int>(2.0 * straight / kRimStretchMm));
-  const double rim_band = near.normals.empty() ? std::min(skin_band, kSkinMarginMm) : skin_band;
-  const double reach = std::min(gap, kRimReachMm - kGapLineMm);
-  std::array<std::vector<double>, 2> wall, inner;
-  for (auto& v : inner) v.assign(static_cast<std::size_t>(bins), kNone);
-  std::vector<GapSample> samples;  // the gap measured at lines kGapLineMm beyond both edges
+  const CircleFit rim =
+      robust_circle(rim_points(d, near, skin_band, gap, spacing, e1, e2), "rim", s);
+  return by_what_is_seen(d, wall, rim, s, e1, e2);
+}
+
+// ---- slot: its stadium outline, from the wall where seen and the rim on the seen skin --------
+
+// A slot's outline in its plane, in (e1, e2) = (along the slot, across it: `direction`): the
+// segment of half length `half` on the axis turned by `angle` about `centre`, widened by
+// `radius` (half the width). Fitted as a hole's circle is, the centre, the long axis's turn
+// and the radius free (a uniform gap of the rim moves the radius only); its straight half
+// length is the CAD's.
+struct Stadium {
+  Vec2 centre = Vec2::Zero();
+  double angle = 0.0;
+  double radius = 0.0;
+  double half = 0.0;
+
+  /// p in the stadium's own axes (x along its axis).
+  Vec2 local(const Vec2& p) const {
+    const double c = std::cos(angle), s = std::sin(angle);
+    const Vec2 v = p - centre;
+    return {c * v.x() + s * v.y(), -s * v.x() + c * v.y()};
+  }
+  /// The signed distance of q (own axes) from the outline (> 0 outside), and the outline's
+  /// outward normal (own axes) at the point nearest q.
+  double distance(const Vec2& q, Vec2& normal) const {
+    const Vec2 v(q.x() - std::clamp(q.x(), -half, half), q.y());
+    const double rho = v.norm();
+    normal = rho > 1e-12 ? Vec2(v / rho) : Vec2(0.0, q.y() < 0.0 ? -1.0 : 1.0);
+    return rho - radius;
+  }
+  double perimeter() const { return 2.0 * std::numbers::pi * radius + 4.0 * half; }
+  /// Where along the outline (0 .. perimeter, counter-clockwise from (half, -radius)) the
+  /// outline point nearest q (own axes) lies.
+  double arc(const Vec2& q) const {
+    const double pi = std::numbers::pi;
+    if (q.x() > half) return (std::atan2(q.y(), q.x() - half) + 0.5 * pi) * radius;
+    if (q.x() < -half) {
+      double a = std::atan2(q.y(), q.x() + half);  // the left end: [pi/2, 3 pi/2]
+      if (a < 0.0) a += 2.0 * pi;
+      return pi * radius + 2.0 * half + (a - 0.5 * pi) * radius;
+    }
+    return q.y() >= 0.0 ? pi * radius + (half - q.x())
+                        : 2.0 * pi * radius + 2.0 * half + (q.x() + half);
+  }
+};
+
+// The normal matrix of the distances at `st` (centre x, y, angle, radius) and the right side.
+Eigen::Matrix4d stadium_normal_matrix(const std::vector<Vec2>& p, const std::vector<bool>& keep,
+                                      const Stadium& st, Eigen::Vector4d* b = nullptr) {
+  Eigen::Matrix4d A = Eigen::Matrix4d::Zero();
+  if (b) b->setZero();
+  const double c = std::cos(st.angle), s = std::sin(st.angle);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (!keep[i]) continue;
+    const Vec2 q = st.local(p[i]);
+    Vec2 n;
+    const double r = st.distance(q, n);
+    // q = R(angle)^T (p - centre): d q / d centre = -R^T, d q / d angle = (q.y, -q.x).
+    const Vec2 n_plane(c * n.x() - s * n.y(), s * n.x() + c * n.y());
+    const Eigen::Vector4d J(-n_plane.x(), -n_plane.y(), n.x() * q.y() - n.y() * q.x(), -1.0);
+    A += J * J.transpose();
+    if (b) *b -= J * r;
+  }
+  return A;
+}
+
+std::vector<double> stadium_residuals(const std::vector<Vec2>& p, const Stadium& st) {
+  std::vector<double> res(p.size());
+  Vec2 n;
+  for (std::size_t i = 0; i < p.size(); ++i) res[i] = st.distance(st.local(p[i]), n);
+  return res;
+}
+
+// A robust stadium (Gauss-Newton from the nominal, outliers beyond outlier_sigmas left out) and
+// what it is worth, as robust_circle: its centre's information, the twelfths of its outline
+// covered (`sectors`).
+CircleFit robust_stadium(const std::vector<Vec2>& pts, Stadium st, const std::string& seen,
+                         const DatumAlignmentSettings& s) {
+  CircleFit out;
+  if (pts.size() < s.min_points) {
+    out.failure = too_few(pts.size(), "on the slot's " + seen, s.min_points).failure;
+    return out;
+  }
+  std::vector<bool> keep(pts.size(), true);
+  std::vector<double> res;
+  for (int round = 0; round < kRobustRounds; ++round) {
+    for (int it = 0; it < 20; ++it) {
+      Eigen::Vector4d b;
+      const Eigen::Matrix4d A = stadium_normal_matrix(pts, keep, st, &b);
+      const Eigen::Vector4d step = A.ldlt().solve(b);
+      if (!step.allFinite()) break;
+      st.centre += step.head<2>();
+      st.angle += step(2);
+      st.radius += step(3);
+      if (step.norm() < 1e-10) break;
+    }
+    res = stadium_residuals(pts, st);
+    const auto next = inliers_of(res, s.outlier_sigmas);
+    if (next == keep) break;
+    keep = next;
+  }
+  out.rms = rms_of(res, keep, out.points);
+  out.circle.centre = st.centre;
+  out.circle.radius = st.radius;
+  if (out.points < s.min_points) {
+    out.failure = too_few(out.points, "on the slot's " + seen + " outline", s.min_points).failure;
+    return out;
+  }
+  std::array<bool, 12> seen_part{};
+  const double perimeter = st.perimeter();
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (keep[i])
+      seen_part[std::min<std::size_t>(
+          11, static_cast<std::size_t>(12.0 * st.arc(st.local(pts[i])) / perimeter))] = true;
+  out.sectors = static_cast<int>(std::count(seen_part.begin(), seen_part.end(), true));
+  const Eigen::Matrix4d cov =
+      stadium_normal_matrix(pts, keep, st).inverse() * std::max(out.rms * out.rms, 1e-6);
+  out.information = cov.topLeftCorner<2, 2>().inverse();
+  out.fitted = out.information.allFinite() && std::isfinite(st.radius);
+  return out;
+}
+
+// The slot's nominal outline in (along, direction).
+Stadium nominal_stadium(const Datum& d) {
+  Stadium st;
+  st.radius = 0.5 * d.diameter_mm;
+  st.half = 0.5 * (d.length_mm - d.diameter_mm);
+  return st;
+}
+
+// Wall points of a slot: between the two skins (clear of their rims), within `band` of its
+// outline. In (e1, e2) = (along, direction).
+std::vector<Vec2> slot_wall_points(const Datum& d, const FeaturePoints& near, double band,
+                                   const Vec3& e1, const Vec3& e2) {
+  const Stadium st = nominal_stadium(d);
+  std::vector<Vec2> pts;
+  Vec2 n;
   for (std::size_t i = 0; i < near.points.size(); ++i) {
     const Vec3 v = near.points[i] - d.point;
-    const double h = v.dot(d.normal), a = v.dot(along), u = v.dot(d.direction);
-    if (std::abs(a) > straight) continue;
-    const std::size_t k = u > 0.0 ? 1 : 0;
-    if (walls_too && h <= -kSkinMarginMm && h >= -d.thickness_mm + kSkinMarginMm &&
-        std::abs(std::abs(u) - half_width) <= band && on_wall(near, i, d.normal))
-      wall[k].push_back(u);
-    if (std::abs(h) > rim_band || !facing(near, i, d.normal, kSkinNormal)) continue;
-    if (std::abs(u) < half_width - band) continue;
-    const auto bin = std::min(static_cast<std::size_t>(bins - 1),
-                              static_cast<std::size_t>((a + straight) / (2.0 * straight) * bins));
-    if (std::abs(u) >= half_width + 0.5 * kGapLineMm &&
-        std::abs(u) <= half_width + kGapLineMm + reach)
-      samples.push_back({std::abs(u) - half_width, k * static_cast<std::size_t>(bins) + bin});
-    if (std::abs(u) > half_width + band + gap) continue;
-    if (std::abs(u) < std::abs(inner[k][bin])) inner[k][bin] = u;
+    const double h = v.dot(d.normal);
+    if (h > -kSkinMarginMm || h < -d.thickness_mm + kSkinMarginMm) continue;
+    const Vec2 uv(v.dot(e1), v.dot(e2));
+    if (std::abs(st.distance(uv, n)) > band || !on_wall(near, i, d.normal)) continue;
+    pts.push_back(uv);
   }
-  const double mean_gap = skin_gap(samples, 2 * static_cast<std::size_t>(bins), reach,
-                                   rim_gap_mean(spacing, 2.0 * straight / bins));
-  // Per stretch along each straight edge, the innermost skin point less the mean gap.
-  std::array<std::vector<double>, 2> rim;
-  for (std::size_t k = 0; k < 2; ++k)
-    for (double u : inner[k])
-      if (u != kNone) rim[k].push_back(k ? u - mean_gap : u + mean_gap);
-  SlotEdges walls = walls_too ? slot_edges(wall, "wall", s.min_points / 2, s) : SlotEdges{};
-  SlotEdges rims = slot_edges(rim, "rim", kRimStretches, s);
-  for (SlotEdges* e : {&walls, &rims})
-    if (e->measured &&
-        std::abs(e->width - d.diameter_mm) > std::max(kDiameterToleranceMm, 0.05 * d.diameter_mm)) {
-      e->measured = false;
-      e->failure = "its edges are " + std::to_string(e->width) + " mm apart (the slot " +
-                   std::to_string(d.diameter_mm) + ")";
-    }
-  FeatureFit f;
-  if (!walls.measured && !rims.measured) {
-    f.failure = walls_too ? walls.failure + "; " + rims.failure : rims.failure;
-    return f;
+  return pts;
+}
+
+// The rim of a slot all round its outline, as a hole's (rim_points): per stretch of the outline
+// (the arc of a hole's sector at the slot's radius) the innermost skin point within band of it,
+// moved in along the outline's normal by the mean gap (measured at the outline kGapLineMm
+// outside, in stretches of the same length).
+std::vector<Vec2> slot_rim_points(const Datum& d, const FeaturePoints& near, double band,
+                                  double gap, double spacing, const Vec3& e1, const Vec3& e2) {
+  const Stadium st = nominal_stadium(d);
+  Stadium line = st;
+  line.radius += kGapLineMm;
+  const double arc = 2.0 * std::numbers::pi / kRimSectors * st.radius;
+  const auto stretches = static_cast<std::size_t>(std::max(1.0, std::round(st.perimeter() / arc)));
+  const auto line_stretches = static_cast<std::size_t>(line.perimeter() / arc);
+  const double reach = std::min(gap, kRimReachMm - kGapLineMm);
+  std::vector<double> inner(stretches, kNone);
+  std::vector<Vec2> rim(stretches, Vec2::Zero()), normal(stretches, Vec2::Zero());
+  std::vector<GapSample> samples;
+  const double skin =
+      near.normals.empty() && d.thickness_mm > 0.0 ? std::min(band, kSkinMarginMm) : band;
+  Vec2 n;
+  for (std::size_t i = 0; i < near.points.size(); ++i) {
+    const Vec3 v = near.points[i] - d.point;
+    if (std::abs(v.dot(d.normal)) > skin || !facing(near, i, d.normal, kSkinNormal)) continue;
+    const Vec2 uv(v.dot(e1), v.dot(e2));
+    const double beyond = st.distance(uv, n);
+    if (beyond < -band) continue;
+    if (beyond >= 0.5 * kGapLineMm && beyond <= kGapLineMm + reach && line_stretches > 0)
+      samples.push_back({beyond, std::min(line_stretches - 1, static_cast<std::size_t>(
+                                                                  line.arc(uv) / arc))});
+    if (beyond > band + gap) continue;
+    const auto k = std::min(stretches - 1, static_cast<std::size_t>(
+                                               st.arc(uv) / st.perimeter() * stretches));
+    if (beyond < inner[k]) inner[k] = beyond, rim[k] = uv, normal[k] = n;
   }
-  // Both walls where seen (exact, sharp); else both rims, whose gaps to the innermost points
-  // cancel in their middle where a wall and the other's rim would not.
-  f.measured = true;
-  const SlotEdges& used = walls.measured ? walls : rims;
-  f.measured_by = walls.measured ? "walls" : "rims";
-  f.point = d.point + used.mid * d.direction;
-  f.diameter_mm = used.width;
-  f.points = used.points;
-  f.rms_mm = used.rms;
-  return f;
+  const double mean_gap = skin_gap(samples, line_stretches, reach, rim_gap_mean(spacing, arc));
+  std::vector<Vec2> pts;
+  for (std::size_t k = 0; k < stretches; ++k)
+    if (inner[k] != kNone) pts.push_back(rim[k] - mean_gap * normal[k]);
+  return pts;
+}
+
+// The slot by what the scan shows of its outline (by_what_is_seen), its centre in the plane;
+// the datum fixes the direction across it only.
+FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, double skin_band,
+                        const DatumAlignmentSettings& s, bool walls_too = true) {
+  const Vec3 e1 = d.normal.cross(d.direction), e2 = d.direction;
+  CircleFit wall;
+  if (walls_too && d.thickness_mm > 0.0)
+    wall = robust_stadium(slot_wall_points(d, near, band, e1, e2), nominal_stadium(d), "wall", s);
+  double spacing = 0.0;
+  const double gap = rim_gap(d, near, skin_band, spacing);
+  const CircleFit rim = robust_stadium(slot_rim_points(d, near, skin_band, gap, spacing, e1, e2),
+                                       nominal_stadium(d), "rim", s);
+  return by_what_is_seen(d, wall, rim, s, e1, e2);
 }
 
 // ---- edge: the band estimate of the skin's end -----------------------------------------------
