@@ -12,8 +12,10 @@
 #include <set>
 #include <sstream>
 
+#include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
 #include "analysis/core/small_solvers.hpp"
+#include "analysis/core/spacing.hpp"
 #include "analysis/registration/datum_internal.hpp"
 
 namespace springscan::analysis {
@@ -358,6 +360,58 @@ std::vector<Transform> half_turns(const PartModel& model) {
   return out;
 }
 
+// How far the whole surface is from the scan placed by a frame: the mean distance of every
+// k-th scan point (at most kMisfitPoints) from the model's surface, each capped at
+// kMisfitCapMm (springback and strays weigh alike in either half). The exact surface's
+// distance where the model has one; else the nearest sample's tangent plane, plus how far
+// beyond a sample spacing the sample lies across (a scan point over a hole of the CAD is that
+// far from its rim: what tells a part's halves apart).
+class SurfaceMisfit {
+ public:
+  explicit SurfaceMisfit(const PartModel& model) : model_(model) {
+    if (model.distance || model.samples.points.empty()) return;
+    tree_.emplace(model.samples.points);
+    std::vector<Vec3> probes;
+    const std::size_t step = std::max<std::size_t>(1, model.samples.points.size() / 200);
+    for (std::size_t i = 0; i < model.samples.points.size(); i += step)
+      probes.push_back(model.samples.points[i]);
+    spacing_ = median_neighbour_spacing(*tree_, probes);
+  }
+
+  double operator()(const std::vector<Vec3>& scan, const Transform& T) const {
+    const std::size_t step = std::max<std::size_t>(1, scan.size() / kMisfitPoints);
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < scan.size(); i += step, ++n)
+      sum += std::min(distance(T * scan[i]), kMisfitCapMm);
+    return n ? sum / static_cast<double>(n) : 0.0;
+  }
+
+ private:
+  static constexpr std::size_t kMisfitPoints = 20'000;
+  static constexpr double kMisfitCapMm = 1.0;
+
+  double distance(const Vec3& q) const {
+    if (model_.distance) return (q - model_.distance->closest(q).foot).norm();
+    if (!tree_) return kMisfitCapMm;
+    const auto hit = tree_->nearest(q);
+    if (!hit) return kMisfitCapMm;
+    const Vec3 v = q - model_.samples.points[hit->index];
+    if (model_.samples.normals.size() != model_.samples.points.size()) return v.norm();
+    const double h = v.dot(model_.samples.normals[hit->index]);
+    const double across = std::sqrt(std::max(v.squaredNorm() - h * h, 0.0));
+    return std::abs(h) + std::max(across - spacing_, 0.0);
+  }
+
+  const PartModel& model_;
+  std::optional<KdTree> tree_;
+  double spacing_ = 0.0;
+};
+
+// A half turn is taken when the surface fits it this much better than the other half at the
+// same pose (a symmetric part's halves fit alike, to the samples' own asymmetry).
+constexpr double kTurnEvidence = 0.95;
+
 }  // namespace
 
 Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
@@ -380,12 +434,36 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
   DatumAlignmentResult out = align_from(scan, scan_normals, T_cad_scan_best, datums, settings);
   if (out.achieved) return out;
   // A near-symmetric part's best fit may lie turned half round (the side panel's, seen all
-  // round): its datums are then where the scan shows other features or none. From the half
-  // turns of the part, the one whose datums are all measured; else the best fit's failure.
+  // round): its datums are then where the scan shows other features or none. A half turn of
+  // the part from which every datum is measured is taken only when the whole surface fits it
+  // better than the other half at the same pose too (a part whose halves both carry the datum
+  // features measures every datum on the twins of the other half: the datums alone do not
+  // tell the halves apart); of several, the one the surface fits best. Else the best fit's
+  // failure, and why a half turn that measured was not taken.
+  std::optional<SurfaceMisfit> misfit;
+  std::optional<DatumAlignmentResult> taken;
+  double taken_misfit = 0.0;
+  std::string refused;
   for (const Transform& H : half_turns(model)) {
     DatumAlignmentResult turned =
         align_from(scan, scan_normals, H * T_cad_scan_best, datums, settings);
     if (!turned.achieved) continue;
+    if (!misfit) misfit.emplace(model);
+    // The turned frame against the other half at the same datum pose (H is its own inverse):
+    // springback's pull on the best fit weighs in neither.
+    const double m = (*misfit)(scan, turned.T_cad_scan);
+    const double other = (*misfit)(scan, H * turned.T_cad_scan);
+    if (!(m < kTurnEvidence * other)) {
+      char text[240];
+      std::snprintf(text, sizeof text,
+                    "; turned half round every datum is measured, but the surface fits that half "
+                    "no better than the other (%.4f mm against %.4f mm): the part's halves are "
+                    "not told apart",
+                    m, other);
+      if (refused.empty()) refused = text;
+      continue;
+    }
+    if (taken && m >= taken_misfit) continue;
     turned.T_datum_best = turned.T_cad_scan * T_cad_scan_best.inverse();
     turned.rounds.insert(turned.rounds.begin(), DatumRound{"half turn", 0.0, 0.0, 180.0});
     for (const Datum& d : datums)
@@ -395,8 +473,11 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
     const Transform back = turned.T_datum_best.inverse();
     for (DatumResult& r : turned.datums)
       r.best_fit_residual = residual_of(r.datum, back * r.measured);
-    return turned;
+    taken = std::move(turned);
+    taken_misfit = m;
   }
+  if (taken) return *taken;
+  out.failure += refused;
   out.T_cad_scan = T_cad_scan_best;
   return out;
 }

@@ -612,15 +612,60 @@ FeatureFit measure_slot(const Datum& d, const FeaturePoints& near, double band, 
 
 // ---- edge: the band estimate of the skin's end -----------------------------------------------
 
-FeatureFit measure_edge(const Datum& d, const FeaturePoints& near, double band,
+// The edge's end face (the sheet's cut, between its skins, facing out across the edge): the
+// robust mean of its points' positions across the edge, or nothing when fewer than min_points
+// are seen. A laser looking across the edge sees it as it sees a hole's wall.
+std::optional<FeatureFit> edge_face(const Datum& d, const FeaturePoints& near, double band,
+                                    const DatumAlignmentSettings& s) {
+  if (d.thickness_mm <= 0.0) return std::nullopt;
+  const Vec3 along = d.normal.cross(d.direction);
+  std::vector<double> u;
+  for (std::size_t i = 0; i < near.points.size(); ++i) {
+    const Vec3 v = near.points[i] - d.point;
+    const double h = v.dot(d.normal), across = v.dot(d.direction);
+    if (h > -kSkinMarginMm || h < -d.thickness_mm + kSkinMarginMm) continue;
+    if (std::abs(across) > band || std::abs(v.dot(along)) > d.radius_mm) continue;
+    if (facing(near, i, d.direction, kSkinNormal)) u.push_back(across);
+  }
+  if (u.size() < s.min_points) return std::nullopt;
+  std::vector<double> sorted = u;
+  const auto mid = sorted.begin() + static_cast<long>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  double centre = *mid;
+  std::vector<double> res(u.size());
+  std::vector<bool> keep(u.size(), true);
+  for (int round = 0; round < kRobustRounds; ++round) {
+    for (std::size_t i = 0; i < u.size(); ++i) res[i] = u[i] - centre;
+    keep = inliers_of(res, s.outlier_sigmas);
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < u.size(); ++i)
+      if (keep[i]) sum += u[i], ++n;
+    if (n < s.min_points) return std::nullopt;
+    centre = sum / static_cast<double>(n);
+  }
+  for (std::size_t i = 0; i < u.size(); ++i) res[i] = u[i] - centre;
+  FeatureFit f;
+  f.measured = true;
+  f.measured_by = "end face";
+  f.point = d.point + centre * d.direction;
+  f.rms_mm = rms_of(res, keep, f.points);
+  return f;
+}
+
+// An edge by its end face where seen (sharp, as a wall), else by the band estimate of the
+// skin's end (boundary.hpp).
+FeatureFit measure_edge(const Datum& d, const FeaturePoints& near, double band, double skin_band,
                         const DatumAlignmentSettings& s) {
+  if (auto face = edge_face(d, near, band, s)) return *face;
   const Vec3 along = d.normal.cross(d.direction);
   std::vector<double> u;
   for (std::size_t i = 0; i < near.points.size(); ++i) {
     const Vec3 v = near.points[i] - d.point;
     const double h = v.dot(d.normal), a = v.dot(along), across = v.dot(d.direction);
-    if (std::abs(h) > band || std::abs(a) > d.radius_mm) continue;
-    if (across < -(band + 2.0 * kEdgeBandMm) || !facing(near, i, d.normal, kSkinNormal)) continue;
+    if (std::abs(h) > skin_band || std::abs(a) > d.radius_mm) continue;
+    if (across < -(skin_band + 2.0 * kEdgeBandMm) || !facing(near, i, d.normal, kSkinNormal))
+      continue;
     u.push_back(across);
   }
   const auto end = high_end(u, kEdgeBandMm, s.min_points, kEdgeSkip);
@@ -661,7 +706,7 @@ double gather_radius(const Datum& d, double band_mm) {
     case DatumKind::kSlot:
       return std::hypot(0.5 * d.length_mm + band_mm + kRimReachMm, wall);
     case DatumKind::kEdge:
-      return std::hypot(d.radius_mm, band_mm + 2.0 * kEdgeBandMm, band_mm);
+      return std::hypot(d.radius_mm, band_mm + 2.0 * kEdgeBandMm, band_mm + d.thickness_mm);
   }
   return 0.0;
 }
@@ -677,7 +722,7 @@ FeatureFit measure_feature(const Datum& d, const FeaturePoints& near, double ban
     case DatumKind::kSlot:
       return measure_slot(d, near, band_mm, skin_band, s);
     case DatumKind::kEdge:
-      return measure_edge(d, near, skin_band, s);
+      return measure_edge(d, near, band_mm, skin_band, s);
   }
   return {};
 }

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <numbers>
 #include <random>
 
@@ -352,6 +353,18 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
   if (!al.achieved()) return out;
   std::tie(out.rotation_deg, out.shift_mm) =
       testing::datum_frame_error(testing::from_row_major(al.transform()) * ls.T_scan_part, points);
+  if (std::getenv("DATUM_DEBUG")) {
+    const Transform E = testing::from_row_major(al.transform()) * ls.T_scan_part;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const Vec3 e = E * points[k] - points[k];
+      std::printf("    %s: along %.4f across %.4f normal %.4f\n",
+                  k < ds.datums.size() ? ds.datums[k].name.c_str() : "centroid", e.dot(cd.along),
+                  e.dot(cd.normal.cross(cd.along)), e.dot(cd.normal));
+    }
+    for (const auto& d : al.datums())
+      std::printf("    %s residual %.4f mm, rms %.4f, by %s\n", d.name().c_str(), d.residual_mm(),
+                  d.fit_rms_mm(), d.measured_by().c_str());
+  }
   std::tie(out.floor_rotation_deg, out.floor_shift_mm) =
       testing::datum_noise_floor(al, ds.datums, points);
   for (const auto& d : al.datums())
