@@ -360,50 +360,87 @@ std::vector<Transform> half_turns(const PartModel& model) {
   return out;
 }
 
-// How far the whole surface is from the scan placed by a frame: the mean distance of every
-// k-th scan point (at most kMisfitPoints) from the model's surface, each capped at
-// kMisfitCapMm (springback and strays weigh alike in either half). The exact surface's
-// distance where the model has one; else the nearest sample's tangent plane, plus how far
-// beyond a sample spacing the sample lies across (a scan point over a hole of the CAD is that
-// far from its rim: what tells a part's halves apart).
+// How far the whole surface is from the scan placed near a frame: every k-th scan point (at
+// most kMisfitPoints) carried by the frame, the frame fitted to the surface by a few
+// point-to-plane steps (so that a half turn and its other half are compared each at its own
+// fit, not at a pose off by the half turn's own error), then the mean distance of those points
+// from the model's nearest sample: along its normal, plus how far beyond kAcrossSpacings
+// sample spacings it lies across (a scan point over a hole of the CAD is that far from its rim:
+// what tells a part's halves apart), each capped at kMisfitCapMm (springback and strays weigh alike
+// in either half).
 class SurfaceMisfit {
  public:
-  explicit SurfaceMisfit(const PartModel& model) : model_(model) {
-    if (model.distance || model.samples.points.empty()) return;
+  SurfaceMisfit(const PartModel& model, const std::vector<Vec3>& scan) : model_(model) {
+    const std::size_t step = std::max<std::size_t>(1, scan.size() / kMisfitPoints);
+    for (std::size_t i = 0; i < scan.size(); i += step) scan_.push_back(scan[i]);
+    if (model.samples.points.empty()) return;
     tree_.emplace(model.samples.points);
     std::vector<Vec3> probes;
-    const std::size_t step = std::max<std::size_t>(1, model.samples.points.size() / 200);
-    for (std::size_t i = 0; i < model.samples.points.size(); i += step)
+    const std::size_t every = std::max<std::size_t>(1, model.samples.points.size() / 200);
+    for (std::size_t i = 0; i < model.samples.points.size(); i += every)
       probes.push_back(model.samples.points[i]);
     spacing_ = median_neighbour_spacing(*tree_, probes);
   }
 
-  double operator()(const std::vector<Vec3>& scan, const Transform& T) const {
-    const std::size_t step = std::max<std::size_t>(1, scan.size() / kMisfitPoints);
+  double operator()(Transform T) const {
+    if (!tree_) return 0.0;
+    for (int it = 0; it < kFitSteps; ++it) {
+      Mat6 A = Mat6::Zero();
+      Vec6 b = Vec6::Zero();
+      for (const Vec3& p : scan_) {
+        const Vec3 q = T * p;
+        Vec3 n;
+        const double r = along_normal(q, n);
+        if (std::abs(r) > kMisfitCapMm) continue;
+        Vec6 row;
+        row << q.cross(n), n;
+        A += row * row.transpose();
+        b -= row * r;
+      }
+      const Vec6 x = ldlt_solve(A, b);
+      if (!x.allFinite()) break;
+      Transform step = Transform::Identity();
+      const Vec3 w = x.head<3>();
+      if (w.norm() > 0.0) step.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).matrix();
+      step.translation() = x.tail<3>();
+      T = step * T;
+    }
     double sum = 0.0;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < scan.size(); i += step, ++n)
-      sum += std::min(distance(T * scan[i]), kMisfitCapMm);
-    return n ? sum / static_cast<double>(n) : 0.0;
+    for (const Vec3& p : scan_) sum += std::min(distance(T * p), kMisfitCapMm);
+    return scan_.empty() ? 0.0 : sum / static_cast<double>(scan_.size());
   }
 
  private:
   static constexpr std::size_t kMisfitPoints = 20'000;
   static constexpr double kMisfitCapMm = 1.0;
+  static constexpr int kFitSteps = 6;
+  // A surface point lies within this many sample spacings of the nearest sample (of an even
+  // random spread, but for 0.2 %).
+  static constexpr double kAcrossSpacings = 3.0;
+
+  bool has_normals() const { return model_.samples.normals.size() == model_.samples.points.size(); }
+
+  // The signed distance along the nearest sample's normal (without normals: toward it).
+  double along_normal(const Vec3& q, Vec3& n) const {
+    const auto hit = tree_->nearest(q);
+    if (!hit) return kMisfitCapMm * 2.0;
+    const Vec3 v = q - model_.samples.points[hit->index];
+    n = has_normals() ? model_.samples.normals[hit->index] : Vec3(v.normalized());
+    return v.dot(n);
+  }
 
   double distance(const Vec3& q) const {
-    if (model_.distance) return (q - model_.distance->closest(q).foot).norm();
-    if (!tree_) return kMisfitCapMm;
     const auto hit = tree_->nearest(q);
     if (!hit) return kMisfitCapMm;
     const Vec3 v = q - model_.samples.points[hit->index];
-    if (model_.samples.normals.size() != model_.samples.points.size()) return v.norm();
+    if (!has_normals()) return v.norm();
     const double h = v.dot(model_.samples.normals[hit->index]);
     const double across = std::sqrt(std::max(v.squaredNorm() - h * h, 0.0));
-    return std::abs(h) + std::max(across - spacing_, 0.0);
+    return std::abs(h) + std::max(across - kAcrossSpacings * spacing_, 0.0);
   }
 
   const PartModel& model_;
+  std::vector<Vec3> scan_;
   std::optional<KdTree> tree_;
   double spacing_ = 0.0;
 };
@@ -448,11 +485,11 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
     DatumAlignmentResult turned =
         align_from(scan, scan_normals, H * T_cad_scan_best, datums, settings);
     if (!turned.achieved) continue;
-    if (!misfit) misfit.emplace(model);
+    if (!misfit) misfit.emplace(model, scan);
     // The turned frame against the other half at the same datum pose (H is its own inverse):
     // springback's pull on the best fit weighs in neither.
-    const double m = (*misfit)(scan, turned.T_cad_scan);
-    const double other = (*misfit)(scan, H * turned.T_cad_scan);
+    const double m = (*misfit)(turned.T_cad_scan);
+    const double other = (*misfit)(H * turned.T_cad_scan);
     if (!(m < kTurnEvidence * other)) {
       char text[240];
       std::snprintf(text, sizeof text,

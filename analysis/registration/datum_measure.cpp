@@ -389,10 +389,9 @@ FeatureFit by_what_is_seen(const Datum& d, const CircleFit& wall, const CircleFi
   if (rim_whole)
     return from_circle(d, rim.circle.centre, 2.0 * rim.circle.radius, rim, e1, e2, "rim");
   FeatureFit f;
-  f.failure = wall.fitted || !wall.failure.empty()
-                  ? arc_text("wall", wall, s.min_hole_sectors, d) + "; " +
-                        arc_text("rim", rim, rim_need, d)
-                  : arc_text("rim", rim, rim_need, d);
+  f.failure = wall.fitted || !wall.failure.empty() ? arc_text("wall", wall, s.min_hole_sectors, d) +
+                                                         "; " + arc_text("rim", rim, rim_need, d)
+                                                   : arc_text("rim", rim, rim_need, d);
   return f;
 }
 
@@ -581,11 +580,11 @@ std::vector<Vec2> slot_rim_points(const Datum& d, const FeaturePoints& near, dou
     const double beyond = st.distance(uv, n);
     if (beyond < -band) continue;
     if (beyond >= 0.5 * kGapLineMm && beyond <= kGapLineMm + reach && line_stretches > 0)
-      samples.push_back({beyond, std::min(line_stretches - 1, static_cast<std::size_t>(
-                                                                  line.arc(uv) / arc))});
+      samples.push_back(
+          {beyond, std::min(line_stretches - 1, static_cast<std::size_t>(line.arc(uv) / arc))});
     if (beyond > band + gap) continue;
-    const auto k = std::min(stretches - 1, static_cast<std::size_t>(
-                                               st.arc(uv) / st.perimeter() * stretches));
+    const auto k =
+        std::min(stretches - 1, static_cast<std::size_t>(st.arc(uv) / st.perimeter() * stretches));
     if (beyond < inner[k]) inner[k] = beyond, rim[k] = uv, normal[k] = n;
   }
   const double mean_gap = skin_gap(samples, line_stretches, reach, rim_gap_mean(spacing, arc));

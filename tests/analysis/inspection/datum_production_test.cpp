@@ -11,7 +11,6 @@
 
 #include <array>
 #include <cstdio>
-#include <cstdlib>
 #include <numbers>
 #include <random>
 
@@ -353,18 +352,6 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
   if (!al.achieved()) return out;
   std::tie(out.rotation_deg, out.shift_mm) =
       testing::datum_frame_error(testing::from_row_major(al.transform()) * ls.T_scan_part, points);
-  if (std::getenv("DATUM_DEBUG")) {
-    const Transform E = testing::from_row_major(al.transform()) * ls.T_scan_part;
-    for (std::size_t k = 0; k < points.size(); ++k) {
-      const Vec3 e = E * points[k] - points[k];
-      std::printf("    %s: along %.4f across %.4f normal %.4f\n",
-                  k < ds.datums.size() ? ds.datums[k].name.c_str() : "centroid", e.dot(cd.along),
-                  e.dot(cd.normal.cross(cd.along)), e.dot(cd.normal));
-    }
-    for (const auto& d : al.datums())
-      std::printf("    %s residual %.4f mm, rms %.4f, by %s\n", d.name().c_str(), d.residual_mm(),
-                  d.fit_rms_mm(), d.measured_by().c_str());
-  }
   std::tie(out.floor_rotation_deg, out.floor_shift_mm) =
       testing::datum_noise_floor(al, ds.datums, points);
   for (const auto& d : al.datums())
@@ -407,20 +394,12 @@ TEST_P(DatumProductionPart, FrameWithinBoundsOfTheConstruction) {
 }
 
 // Under the sanitizers (5-15x slower) one small case: the nema-17 bracket on its holes.
-// Open (docs/alignment.md "Not done yet"; run them with --gtest_also_run_disabled_tests): the
-// side panel (its one slot's rims along the wall and its edges across it, seen all round) and
-// the nema-17 bracket on its slots (4-6 rim points on a slot's 3 mm straight edges) miss the
-// bounds.
-std::vector<ProductionCase> cases(bool open) {
+std::vector<ProductionCase> cases() {
   std::vector<ProductionCase> all = production_cases();
-  const auto is_open = [](const ProductionCase& c) {
-    return c.name == "SidePanel" || c.name == "Nema17Slots";
-  };
-  all.erase(std::remove_if(all.begin(), all.end(),
-                           [&](const ProductionCase& c) { return is_open(c) != open; }),
-            all.end());
-  if (testing::kUnderSanitizer && !open) {
-    all.erase(all.begin(), all.end() - 1);
+  if (testing::kUnderSanitizer) {
+    all.erase(std::remove_if(all.begin(), all.end(),
+                             [](const ProductionCase& c) { return c.name != "Nema17Holes"; }),
+              all.end());
     all.front().points = 40'000;
   }
   return all;
@@ -430,10 +409,7 @@ std::string case_name(const ::testing::TestParamInfo<ProductionCase>& param) {
   return param.param.name;
 }
 
-INSTANTIATE_TEST_SUITE_P(Production, DatumProductionPart, ::testing::ValuesIn(cases(false)),
-                         case_name);
-INSTANTIATE_TEST_SUITE_P(DISABLED_Open, DatumProductionPart, ::testing::ValuesIn(cases(true)),
-                         case_name);
+INSTANTIATE_TEST_SUITE_P(Production, DatumProductionPart, ::testing::ValuesIn(cases()), case_name);
 
 }  // namespace
 }  // namespace springscan::analysis

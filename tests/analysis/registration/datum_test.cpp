@@ -429,6 +429,64 @@ TEST(DatumAlignment, BestFitTurnedHalfRoundIsTurnedBack) {
   EXPECT_TRUE(plain->T_cad_scan.isApprox(half * c.best));
 }
 
+// A part whose halves both carry the datum features: the plate with two 8 mm holes placed
+// alike under its half turn about z. Pad A3's spot is not in the scan, so the best fit's half
+// cannot measure it; turned half round every datum falls on its twin and is measured. The
+// datums alone cannot tell the halves apart and the surface fits both alike: the turn is not
+// taken (it would be 180 deg off), the best fit's failure is reported, and why.
+TEST(DatumAlignment, SymmetricPartIsNotTurnedOnItsDatumsAlone) {
+  const Vec3 b(20.0, 30.0, 0.0), twin(80.0, 30.0, 0.0);
+  constexpr double kDiameter = 8.0;
+  // The part's points: the scan's, and (another draw) the model's samples.
+  const auto draw = [&](unsigned seed) {
+    Plate out;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> ux(0.0, 100.0), uy(0.0, 60.0);
+    for (int i = 0; i < 66'000; ++i) {
+      const double y = uy(rng);
+      const double x = ux(rng);
+      const Vec3 q(x, y, 0.0);
+      if ((q - b).norm() < kDiameter / 2 || (q - twin).norm() < kDiameter / 2) continue;
+      out.points.push_back(q);
+      out.normals.push_back(Vec3::UnitZ());
+    }
+    for (const Vec3& c : {b, twin})
+      for (double a = 0.0; a < 360.0; a += 2.0)
+        for (double z = -0.1; z > -kThickness; z -= 0.2) {
+          const Vec3 radial(std::cos(a * std::numbers::pi / 180),
+                            std::sin(a * std::numbers::pi / 180), 0.0);
+          out.points.push_back(c + 0.5 * kDiameter * radial + Vec3(0, 0, z));
+          out.normals.push_back(-radial);
+        }
+    return out;
+  };
+  const Plate sym = draw(5), samples = draw(6);
+  PartModel model = plate_model();
+  model.samples.points = samples.points;
+  model.samples.normals = samples.normals;
+  DatumAlignmentSettings s;
+  s.datums = {pad("A1", 10, 10), pad("A2", 90, 10), pad("A3", 50, 52),
+              hole("B", b, kDiameter, Vec3::Zero()), hole("C", twin, kDiameter, Vec3::UnitY())};
+  Plate seen;  // A3's spot out of the scan (its twin, at (50, 8), is in it)
+  for (std::size_t i = 0; i < sym.points.size(); ++i)
+    if ((sym.points[i] - Vec3(50, 52, 0)).norm() > 7.0)
+      seen.points.push_back(sym.points[i]), seen.normals.push_back(sym.normals[i]);
+  const Case c = scan_case(seen, 13);
+  auto r = align_to_datums(c.scan, c.normals, c.best, model, s);
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_FALSE(r->achieved) << "taken: " << frame_error(r->T_cad_scan, c.pose).first << " deg";
+  EXPECT_EQ(r->failed_datum, "A3");
+  EXPECT_NE(r->failure.find("halves are not told apart"), std::string::npos) << r->failure;
+  EXPECT_TRUE(r->T_cad_scan.isApprox(c.best));
+  // The same scan with A3's spot in it: measured from the best fit, no turn.
+  const Case whole = scan_case(sym, 13);
+  auto w = align_to_datums(whole.scan, whole.normals, whole.best, model, s);
+  ASSERT_TRUE(w) << w.message();
+  ASSERT_TRUE(w->achieved) << w->failure;
+  EXPECT_NE(w->rounds.front().stage, "half turn");
+  EXPECT_LE(frame_error(w->T_cad_scan, whole.pose).first, 0.005);
+}
+
 TEST(DatumAlignment, UnmeasurableDatumIsNamedAndTheFrameIsTheBestFit) {
   Plate p = plate(/*wall_b=*/false);
   Plate cut;
