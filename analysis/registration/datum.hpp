@@ -17,8 +17,9 @@
 //      the pad's skin within its radius; a hole by a circle fit (geometric, started from the
 //      algebraic one, robust: points beyond outlier_sigmas robust sigmas left out) of the points
 //      on its wall, across the nominal axis, which a tilted laser sees on the side facing it; a
-//      slot by the mean across-position of each of its two straight walls; an edge by the band
-//      estimate of the skin's end across it (registration/boundary.hpp step 1);
+//      slot by a stadium fit of its whole outline (straight edges and round ends) the same way;
+//      an edge by its end face where seen, else by the band estimate of the skin's end across
+//      it (registration/boundary.hpp step 1);
 //   2. the datum frame: the rigid motion that brings every measured feature onto its nominal
 //      position along the directions it fixes, weighted least squares (Gauss-Newton on exact
 //      rotations); exact for 3-2-1;
@@ -28,10 +29,12 @@
 // to several millimetres and degrees off at the datums, so each feature is first found within
 // capture_mm (a pad by the dominant skin facing it, a hole or slot by where its outline fits the
 // empty part of the skin's occupancy, then its rim) and the frame solved from those.
-// A hole is measured by what the scan shows: its wall, its rim on the seen skin, or both.
+// A hole or slot is measured by what the scan shows: its wall, its rim on the seen skin, or both.
 // When a datum cannot be measured from the best fit, the whole alignment is tried from the best
 // fit turned half round about each of the part's principal axes (a near-symmetric part's best
-// fit may lie turned so); the first from which every datum is measured is the result.
+// fit may lie turned so); one from which every datum is measured is the result only when the
+// whole surface fits it better than the other half at the same pose (a part whose halves both
+// carry the datum features is not turned on its datums alone).
 // A datum whose feature cannot be measured (not in the scan, on the skin it does not see) is
 // never a silent fallback to the best fit: the result says so (`achieved` false, the datum named
 // and why), its frame the best fit, and the caller fails the verdict.
@@ -106,8 +109,8 @@ struct DatumResult {
   std::size_t points = 0;                 ///< scan points the feature was fitted to
   double fit_rms_mm = 0.0;                ///< their rms distance from the fitted feature
   /// What of the feature the scan showed and the last round used: "plane" (pad), "wall", "rim"
-  /// or "wall and rim" (hole: weighted by their centres' information), "walls" or "rims" (slot:
-  /// its straight edges, both walls where seen), "skin's end" (edge).
+  /// or "wall and rim" (hole, and a slot's whole outline: weighted by their centres'
+  /// information), "end face" or "skin's end" (edge).
   std::string measured_by;
 };
 
