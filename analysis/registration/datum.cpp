@@ -382,8 +382,10 @@ class SurfaceMisfit {
     spacing_ = median_neighbour_spacing(*tree_, probes);
   }
 
-  double operator()(Transform T) const {
-    if (!tree_) return 0.0;
+  /// Per scan point kept, its capped distance at the fitted frame (the same points in the
+  /// same order for every frame: the halves are compared point by point).
+  std::vector<double> operator()(Transform T) const {
+    if (!tree_) return std::vector<double>(scan_.size(), 0.0);
     for (int it = 0; it < kFitSteps; ++it) {
       Mat6 A = Mat6::Zero();
       Vec6 b = Vec6::Zero();
@@ -405,9 +407,10 @@ class SurfaceMisfit {
       step.translation() = x.tail<3>();
       T = step * T;
     }
-    double sum = 0.0;
-    for (const Vec3& p : scan_) sum += std::min(distance(T * p), kMisfitCapMm);
-    return scan_.empty() ? 0.0 : sum / static_cast<double>(scan_.size());
+    std::vector<double> out;
+    out.reserve(scan_.size());
+    for (const Vec3& p : scan_) out.push_back(std::min(distance(T * p), kMisfitCapMm));
+    return out;
   }
 
  private:
@@ -445,9 +448,10 @@ class SurfaceMisfit {
   double spacing_ = 0.0;
 };
 
-// A half turn is taken when the surface fits it this much better than the other half at the
-// same pose (a symmetric part's halves fit alike, to the samples' own asymmetry).
-constexpr double kTurnEvidence = 0.95;
+// A half turn is taken when the surface fits it better than the other half at the same pose by
+// this many standard errors of the paired difference (a symmetric part's halves fit alike, to
+// the samples' own asymmetry).
+constexpr double kTurnEvidenceSigmas = 5.0;
 
 }  // namespace
 
@@ -488,15 +492,28 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
     if (!misfit) misfit.emplace(model, scan);
     // The turned frame against the other half at the same datum pose (H is its own inverse):
     // springback's pull on the best fit weighs in neither.
-    const double m = (*misfit)(turned.T_cad_scan);
-    const double other = (*misfit)(H * turned.T_cad_scan);
-    if (!(m < kTurnEvidence * other)) {
-      char text[240];
+    const std::vector<double> here = (*misfit)(turned.T_cad_scan);
+    const std::vector<double> there = (*misfit)(H * turned.T_cad_scan);
+    // The paired difference (the other half's distance less this one's, point by point): its
+    // mean in standard errors. Springback far from the features is capped alike in both, and a
+    // symmetric part's halves fit alike: the difference is then the samples' noise.
+    double m = 0.0, other = 0.0, sum = 0.0, sum2 = 0.0;
+    for (std::size_t i = 0; i < here.size(); ++i) {
+      const double d = there[i] - here[i];
+      m += here[i], other += there[i], sum += d, sum2 += d * d;
+    }
+    const auto n = static_cast<double>(std::max<std::size_t>(here.size(), 1));
+    m /= n, other /= n;
+    const double mean = sum / n;
+    const double standard_error = std::sqrt(std::max(sum2 / n - mean * mean, 0.0) / n);
+    const double sigmas = mean / std::max(standard_error, 1e-12);
+    if (!(sigmas > kTurnEvidenceSigmas)) {
+      char text[300];
       std::snprintf(text, sizeof text,
                     "; turned half round every datum is measured, but the surface fits that half "
-                    "no better than the other (%.4f mm against %.4f mm): the part's halves are "
-                    "not told apart",
-                    m, other);
+                    "no better than the other (%.4f mm against %.4f mm, %.1f standard errors): "
+                    "the part's halves are not told apart",
+                    m, other, sigmas);
       if (refused.empty()) refused = text;
       continue;
     }
