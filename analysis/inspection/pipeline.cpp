@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "analysis/core/kdtree.hpp"
@@ -317,51 +318,55 @@ const std::vector<Vec3>& normals_of(const PointCloud& scan) {
   return scan.normals.size() == scan.size() ? scan.normals : kNoNormals;
 }
 
-// Keeps `p` with its estimated normal `n` when `n` faces the scanner's `viewpoint` within 60 deg
-// (the rule of exact_update_points and facing_fit_points below, said there).
-void keep_if_facing_viewpoint(const Vec3& p, const Vec3& n, const Vec3& viewpoint,
-                              FacingSample& out) {
-  constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
-  if (n.dot((viewpoint - p).normalized()) < kMinFacingViewpoint) return;
-  out.points.push_back(p);
-  out.normals.push_back(n);
+// The fit points' estimated normals with the signs the scan tells (registration/facing.hpp
+// orient_along_skins: facing the viewpoint within 60 deg, or grown along the skin from such a
+// point), for a points-only scan of a solid; empty otherwise (the scan's normals, or a surface).
+SkinNormals skin_normals(const PointCloud& scan, const PartModel& model,
+                         const PointCloud& fit_points, const std::vector<Vec3>& fit_normals,
+                         const Vec3& viewpoint) {
+  if (!normals_of(scan).empty() || fit_normals.empty()) return {};
+  double thickness = std::numeric_limits<double>::infinity();
+  for (const Flange& f : model.segmentation.flanges)
+    if (f.thickness_mm > 0.0) thickness = std::min(thickness, f.thickness_mm);
+  return orient_along_skins(fit_points.points, fit_normals, viewpoint, 0.5 * thickness);
 }
 
 // The scan points the exact-surface updates pair (global_fit.hpp, finish_best_fit): an
 // evenly strided sample of `count`, with the scan's normals when it has them. A points-only
-// scan of a solid lends a point the normal of its nearest fit point (estimated there and turned
-// toward the scanner's viewpoint, fit_point_normals), so that the facing rule holds: without
-// it a point near a closed hem (four skins within 1.8 mm) paired across the sheet, and the
-// cover flange's points-only field went 0.3 -> 1.2 mm. Only where that normal faces the
-// viewpoint within 60 deg: a standing wall's estimated normal is horizontal, and its sign, which
-// the viewpoint decides by a small vertical part, is a guess (a wall seen from both sides by
-// two passes got either skin's). Such points are left out of the updates. Empty normals: a
-// surface model, no rule.
+// scan of a solid lends a point the normal of its nearest fit point, so that the facing rule
+// holds: without it a point near a closed hem (four skins within 1.8 mm) paired across the
+// sheet, and the cover flange's points-only field went 0.3 -> 1.2 mm. Only where the scan tells
+// that normal's sign (`skins`): a standing wall's estimated normal is horizontal, and its sign,
+// which the viewpoint decides by a small vertical part, is a guess until it is grown along the
+// skin from a flange that faces the scanner (issue 32: with the walls left out, the frame sat on
+// the flanges, 0.33 mm off on a perfect front panel). Such points are left out of the updates.
 FacingSample exact_update_points(const PointCloud& scan, const PointCloud& fit_points,
-                                 const std::vector<Vec3>& fit_normals, const Vec3& viewpoint,
-                                 std::size_t count) {
-  if (!normals_of(scan).empty() || fit_normals.empty())
-    return facing_sample(scan.points, normals_of(scan), count);
+                                 const SkinNormals& skins, std::size_t count) {
+  if (skins.normals.empty()) return facing_sample(scan.points, normals_of(scan), count);
   const KdTree fit_tree(fit_points.points);
   FacingSample out;
   for (const Vec3& p : strided_sample(scan.points, count))
-    if (const auto nn = fit_tree.nearest(p))
-      keep_if_facing_viewpoint(p, fit_normals[nn->index], viewpoint, out);
+    if (const auto nn = fit_tree.nearest(p); nn && skins.known[nn->index]) {
+      out.points.push_back(p);
+      out.normals.push_back(skins.normals[nn->index]);
+    }
   return out;
 }
 
 // The fit's points for the least-squares updates on the samples (finish_best_fit): all of them
-// with their normals, but for a points-only scan of a solid those whose estimated normal faces
-// the scanner's viewpoint within 60 deg (as exact_update_points). A standing wall's estimated
-// normal may point to either skin, and with no share trimmed its points pulled the motor
-// bracket's frame 0.5 mm toward the other skin; the trimmed ICP before had left them out.
-FacingSample facing_fit_points(const PointCloud& scan, const PointCloud& fit_points,
-                               const std::vector<Vec3>& fit_normals, const Vec3& viewpoint) {
-  if (!normals_of(scan).empty() || fit_normals.empty())
-    return FacingSample{fit_points.points, fit_normals};
+// with their normals, but for a points-only scan of a solid those whose normal's sign the scan
+// tells (as exact_update_points). A standing wall's guessed normal may point to either skin, and
+// with no share trimmed such points pulled the motor bracket's frame 0.5 mm toward the other
+// skin; the trimmed ICP before had left them out.
+FacingSample facing_fit_points(const PointCloud& fit_points, const std::vector<Vec3>& fit_normals,
+                               const SkinNormals& skins) {
+  if (skins.normals.empty()) return FacingSample{fit_points.points, fit_normals};
   FacingSample out;
   for (std::size_t i = 0; i < fit_points.size(); ++i)
-    keep_if_facing_viewpoint(fit_points.points[i], fit_normals[i], viewpoint, out);
+    if (skins.known[i]) {
+      out.points.push_back(fit_points.points[i]);
+      out.normals.push_back(skins.normals[i]);
+    }
   return out;
 }
 
@@ -372,14 +377,12 @@ FacingSample facing_fit_points(const PointCloud& scan, const PointCloud& fit_poi
 // Only now: the rival orientations were compared on trimmed fits, where a near-symmetric part's
 // few telling points weigh (untrimmed, the side panel's half turn scored within 0.1 %).
 Expected<BoundaryResult> least_squares_best_fit(
-    const PointCloud& scan, const BoundaryScan& boundary_scan, const ReductionOutcome& reduced,
-    const std::vector<Vec3>& fit_normals, const PartModel& model, const KdTree& model_tree,
-    const SurfaceDistance* exact_updates, const FacingSample& exact_points,
-    const PipelineSettings& config, GlobalFitResult& fit) {
+    const BoundaryScan& boundary_scan, const ReductionOutcome& reduced,
+    const std::vector<Vec3>& fit_normals, const SkinNormals& skins, const PartModel& model,
+    const KdTree& model_tree, const SurfaceDistance* exact_updates,
+    const FacingSample& exact_points, const PipelineSettings& config, GlobalFitResult& fit) {
   const FacingSample points =
-      exact_updates
-          ? exact_points
-          : facing_fit_points(scan, reduced.scan_for_fit, fit_normals, config.normals.viewpoint);
+      exact_updates ? exact_points : facing_fit_points(reduced.scan_for_fit, fit_normals, skins);
   IcpResult polished = fit.icp;
   polished.T_target_source = fit.T_cad_scan;
   if (auto error = finish_best_fit(points.points, points.normals, exact_updates, model_tree,
@@ -518,10 +521,11 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   // tangent planes are biased (a bend radius below their spacing).
   const SurfaceDistance* exact_updates =
       samples_biased_at_bends(model, model_tree) ? model.distance.get() : nullptr;
+  const SkinNormals skins =
+      skin_normals(scan, model, reduced->scan_for_fit, *fit_normals, config->normals.viewpoint);
   const FacingSample exact_points =
       exact_updates
-          ? exact_update_points(scan, reduced->scan_for_fit, *fit_normals,
-                                config->normals.viewpoint, config->global_fit.exact_points)
+          ? exact_update_points(scan, reduced->scan_for_fit, skins, config->global_fit.exact_points)
           : FacingSample{};
   if (auto error = finish_best_fit(exact_points.points, exact_points.normals, exact_updates,
                                    model_tree, model.samples.normals, config->global_fit,
@@ -544,7 +548,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   if (!pinned) return pinned.error();
   // The pose chosen, its last updates are the paper's best fit: least squares over the whole
   // seen surface, no share trimmed (global_fit.hpp final_trimmed_fraction), then the ends again.
-  pinned = least_squares_best_fit(scan, boundary_scan, *reduced, *fit_normals, model, model_tree,
+  pinned = least_squares_best_fit(boundary_scan, *reduced, *fit_normals, skins, model, model_tree,
                                   exact_updates, exact_points, *config, *fit);
   if (!pinned) return pinned.error();
   fit->rms_final_mm =

@@ -1,7 +1,10 @@
 #include "analysis/registration/facing.hpp"
 
+#include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <queue>
 
 namespace springscan::analysis {
 
@@ -59,6 +62,69 @@ IcpPairSearch exact_surface_pairs(const SurfaceDistance& exact,
                 (n.isZero() || hit.normal.dot(n) > 0.0);
     }
   };
+}
+
+namespace {
+
+// How many nearest points a skin grows to from each point, the point itself included (as the
+// normals' estimate, preprocess/normals.hpp).
+constexpr std::size_t kSkinNeighbours = 10;
+constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
+constexpr double kMinParallel = 0.5;         // a step between normals within 60 deg
+
+// A step of the growth: to point `to` from an oriented point, at cost 1 - |n_from . n_to|.
+struct SkinStep {
+  double cost;
+  std::uint32_t from, to;
+  bool operator>(const SkinStep& o) const { return cost > o.cost; }
+};
+
+}  // namespace
+
+SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                               const Vec3& viewpoint, double max_off_skin_mm) {
+  SkinNormals out{normals, std::vector<std::uint8_t>(points.size(), 0)};
+  if (points.empty() || normals.size() != points.size()) return out;
+  const KdTree tree(points);
+  std::priority_queue<SkinStep, std::vector<SkinStep>, std::greater<>> steps;
+  std::array<std::uint32_t, kSkinNeighbours> nn{};
+  std::array<double, kSkinNeighbours> d2{};
+  const auto push_neighbours = [&](std::uint32_t i) {
+    const Vec3& p = points[i];
+    const Vec3& n = out.normals[i];
+    const std::size_t found = tree.knn(p, kSkinNeighbours, nn.data(), d2.data());
+    for (std::size_t j = 0; j < found; ++j) {
+      const std::uint32_t q = nn[j];
+      const Vec3& m = out.normals[q];
+      if (out.known[q] || m.isZero()) continue;
+      const Vec3 d = points[q] - p;
+      const double parallel = std::abs(n.dot(m));
+      // The other skin lies off this one's tangent plane by a sheet thickness.
+      if (parallel < kMinParallel || std::abs(n.dot(d)) > max_off_skin_mm ||
+          std::abs(m.dot(d)) > max_off_skin_mm)
+        continue;
+      steps.push({1.0 - parallel, i, q});
+    }
+  };
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Vec3& n = normals[i];
+    if (n.isZero() || n.dot((viewpoint - points[i]).normalized()) < kMinFacingViewpoint) continue;
+    out.known[i] = 1;
+  }
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (out.known[i]) push_neighbours(static_cast<std::uint32_t>(i));
+  // Prim's order from every seed at once: each point takes its sign over the most parallel step
+  // that reaches it first.
+  while (!steps.empty()) {
+    const SkinStep s = steps.top();
+    steps.pop();
+    if (out.known[s.to]) continue;
+    Vec3& m = out.normals[s.to];
+    if (out.normals[s.from].dot(m) < 0.0) m = -m;
+    out.known[s.to] = 1;
+    push_neighbours(s.to);
+  }
+  return out;
 }
 
 }  // namespace springscan::analysis
