@@ -69,8 +69,12 @@ namespace {
 // How many nearest points a skin grows to from each point, the point itself included (as the
 // normals' estimate, preprocess/normals.hpp).
 constexpr std::size_t kSkinNeighbours = 10;
-constexpr double kMinFacingViewpoint = 0.5;  // cos 60 deg
-constexpr double kMinParallel = 0.5;         // a step between normals within 60 deg
+// A seed faces the viewpoint within 45 deg. A pass tilted 35 deg sees a skin that faces up to
+// 125 deg away from the viewpoint (grazing), and its estimated normal, turned toward the
+// viewpoint, then faces it within 55 deg with the wrong sign: with seeds at 60 deg, one such
+// point on a bend's outer skin turned a whole wall (a perfect Z profile 1.2 mm off).
+constexpr double kMinFacingViewpoint = 0.70710678118654752;  // cos 45 deg
+constexpr double kMinParallel = 0.5;                         // a step between normals within 60 deg
 
 // A step of the growth: to point `to` from an oriented point, at cost 1 - |n_from . n_to|.
 struct SkinStep {

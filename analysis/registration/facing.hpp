@@ -75,15 +75,16 @@ struct SkinNormals {
 };
 
 /// Signs estimated `normals` (of `points`, a one-sided scan of a solid) along each skin: a normal
-/// facing `viewpoint` within 60 deg keeps its sign (a skin seen from above the scanner cannot
-/// face away from it), and the others get theirs by growing each skin from those, over the k
-/// nearest points, the most parallel neighbour first (Hoppe et al. 1992: the consistent
-/// orientation of a minimum spanning tree; Open3D's orient_normals_consistent_tangent_plane). A
-/// standing wall's estimated normal is horizontal, and the viewpoint, far above, decides its sign
-/// by a small vertical part: a guess. Grown along the skin from the flange it bends from, its sign
-/// is the skin's. A step is taken only between points within `max_off_skin_mm` of each other's
-/// tangent plane (the other skin lies a sheet thickness away) whose normals are within 60 deg;
-/// a point no such step reaches keeps its normal, `known` false.
+/// facing `viewpoint` within 45 deg keeps its sign (no pass tilted less than 45 deg from the
+/// viewpoint's direction sees a skin that faces away from it by 135 deg), and the others get theirs
+/// by growing each skin from those, over the k nearest points, the most parallel neighbour first
+/// (Hoppe et al. 1992: the consistent orientation of a minimum spanning tree; Open3D's
+/// orient_normals_consistent_tangent_plane). A standing wall's estimated normal is horizontal, and
+/// the viewpoint, far above, decides its sign by a small vertical part: a guess. Grown along the
+/// skin from the flange it bends from, its sign is the skin's. A step is taken only between points
+/// within `max_off_skin_mm` of each other's tangent plane (the other skin lies a sheet thickness
+/// away) whose normals are within 60 deg; a point no such step reaches keeps its normal, `known`
+/// false.
 SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
                                const Vec3& viewpoint, double max_off_skin_mm);
 

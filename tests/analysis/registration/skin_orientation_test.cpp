@@ -1,0 +1,109 @@
+// orient_along_skins (registration/facing.hpp): the signs of a points-only scan's estimated
+// normals grown along each skin from the points that face the scanner. The part: the cross
+// section of a 2 mm solid L (a flange lying flat, a wall standing at its end), seen from above on
+// the flange's top skin, both skins of the wall and its top edge, as two tilted passes see it.
+// The truth is the construction's outward normal of each skin.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "analysis/preprocess/normals.hpp"
+#include "analysis/registration/facing.hpp"
+
+namespace springscan::analysis {
+namespace {
+
+struct SeenL {
+  std::vector<Vec3> points, outward;
+};
+
+// Flange: x in [0, 40], z in [0, 2]; wall: x in [-2, 0], z in [0, 40]; 20 mm along y. The
+// points 0.5 mm apart on the flange's top skin (z = 2, up), the wall's inner skin (x = 0, +x),
+// its top edge (z = 40, up) and its outer skin (x = -2, -x); the flange's underside unseen.
+SeenL seen_l() {
+  SeenL l;
+  const auto add = [&](const Vec3& p, const Vec3& n) {
+    l.points.push_back(p);
+    l.outward.push_back(n);
+  };
+  for (double y = 0.0; y <= 20.0; y += 0.5) {
+    for (double x = 0.25; x <= 40.0; x += 0.5) add({x, y, 2.0}, Vec3::UnitZ());
+    for (double z = 2.25; z < 40.0; z += 0.5) add({0.0, y, z}, Vec3::UnitX());
+    for (double x = -1.75; x < 0.0; x += 0.5) add({x, y, 40.0}, Vec3::UnitZ());
+    for (double z = 2.25; z < 40.0; z += 0.5) add({-2.0, y, z}, -Vec3::UnitX());
+  }
+  return l;
+}
+
+TEST(SkinOrientation, TheWallsTakeTheirSkinsSignFromTheFlangeThatFacesTheScanner) {
+  const SeenL l = seen_l();
+  NormalSettings ns;
+  auto estimated = estimate_normals(l.points, ns);
+  ASSERT_TRUE(estimated);
+  // A standing wall's estimated normal is horizontal: its sign toward the viewpoint is a guess.
+  // Every such sign drawn at random, as the viewpoint's tiny vertical part would decide it.
+  std::vector<Vec3> normals = estimated->normals;
+  std::mt19937 rng(5);
+  for (Vec3& n : normals)
+    if (std::abs(n.z()) < 0.5 && rng() % 2) n = -n;
+  const SkinNormals skins =
+      orient_along_skins(l.points, normals, ns.viewpoint, /*max_off_skin_mm=*/1.0);
+  ASSERT_EQ(skins.normals.size(), l.points.size());
+  std::size_t wrong = 0, unknown = 0, checked = 0;
+  for (std::size_t i = 0; i < l.points.size(); ++i) {
+    // Within 1 mm of an edge the estimate blends two skins: its sign is judged elsewhere.
+    const Vec3& p = l.points[i];
+    const bool corner = (p.z() < 3.0 && p.x() < 1.0) || p.z() > 39.0;
+    if (corner) continue;
+    ++checked;
+    unknown += skins.known[i] ? 0 : 1;
+    wrong += skins.normals[i].dot(l.outward[i]) > 0.0 ? 0 : 1;
+  }
+  EXPECT_GT(checked, 4000u);
+  EXPECT_EQ(unknown, 0u);
+  EXPECT_EQ(wrong, 0u);
+}
+
+TEST(SkinOrientation, AnIslandNoFacingPointReachesStaysUnknown) {
+  // The wall's outer skin alone, 10 mm beside the flange: no step reaches it.
+  std::vector<Vec3> points, normals;
+  for (double y = 0.0; y <= 10.0; y += 0.5) {
+    for (double x = 0.25; x <= 20.0; x += 0.5) {
+      points.push_back({x, y, 0.0});
+      normals.push_back(Vec3::UnitZ());
+    }
+    for (double z = 1.0; z < 20.0; z += 0.5) {
+      points.push_back({-10.0, y, z});
+      normals.push_back(Vec3::UnitX());
+    }
+  }
+  const SkinNormals skins = orient_along_skins(points, normals, Vec3(0.0, 0.0, 1e6), 1.0);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(skins.known[i] != 0, points[i].x() > 0.0) << i;
+    EXPECT_TRUE(skins.normals[i].isApprox(normals[i])) << i;  // unknown: left as it was
+  }
+}
+
+TEST(SkinOrientation, NoStepAcrossTheSheet) {
+  // A 0.8 mm sheet seen on both skins, its points 1 mm apart (the nearest neighbours of a point
+  // lie on the other skin too): the top skin faces the viewpoint, the bottom one's normals point
+  // down (as if that skin were seen from below). Parallel, but a sheet thickness off each other's
+  // plane: the bottom must not take the top's sign, nor be known.
+  std::vector<Vec3> points, normals;
+  for (double x = 0.0; x <= 10.0; x += 1.0)
+    for (double y = 0.0; y <= 10.0; y += 1.0) {
+      points.push_back({x, y, 0.8});
+      normals.push_back(Vec3::UnitZ());
+      points.push_back({x, y, 0.0});
+      normals.push_back(-Vec3::UnitZ());
+    }
+  const SkinNormals skins = orient_along_skins(points, normals, Vec3(0.0, 0.0, 1e6), 0.4);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    EXPECT_EQ(skins.known[i] != 0, i % 2 == 0) << i;
+    EXPECT_TRUE(skins.normals[i].isApprox(normals[i])) << i;
+  }
+}
+
+}  // namespace
+}  // namespace springscan::analysis
