@@ -20,6 +20,7 @@
 #include "analysis/core/spatial_order.hpp"
 #include "analysis/inspection/pipeline.hpp"
 #include "bench/inspection_loop.hpp"
+#include "simulators/parts/demo_hat.hpp"
 #include "simulators/parts/sheet_part.hpp"
 #include "tests/support/test_paths.hpp"
 
@@ -37,22 +38,6 @@ struct Data {
   std::string error;
 };
 
-// demo/hat-profile.step's profile and the demo scan's pose (simulators/demo_part_main.cpp).
-parts::ProfileSpec hat() {
-  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
-  return spec;
-}
-
-Transform pose() {
-  Transform T = Transform::Identity();
-  T.linear() = (Eigen::AngleAxisd(0.6, Vec3(0.2, 0.3, 1.0).normalized()) *
-                Eigen::AngleAxisd(-0.25, Vec3::UnitX()))
-                   .toRotationMatrix();
-  T.translation() = Vec3(120.0, -35.0, 410.0);
-  return T;
-}
-
 std::int64_t point_count() {
   const char* n = std::getenv("SPRINGSCAN_BENCH_POINTS");
   return n ? std::max<std::int64_t>(1000, std::atoll(n)) : 1'000'000;
@@ -66,8 +51,8 @@ const Data& data() {
     s.point_count = point_count();
     s.noise_sigma_mm = 0.02;
     s.outlier_fraction = 0.005;
-    s.T_scan_part = pose();
-    auto scan = parts::simulate_scan(hat(), {1.5, 0.8, 1.1, 0.4}, s);
+    s.T_scan_part = parts::demo_hat_pose();
+    auto scan = parts::simulate_scan(parts::demo_hat_profile(), parts::kDemoHatSpringbackDeg, s);
     if (!model || !scan) {
       out.error = model ? scan.message() : model.message();
       return out;
@@ -89,7 +74,7 @@ PointCloud ordered(const PointCloud& scan, Order order) {
     std::shuffle(out.points.begin(), out.points.end(), rng);
     return out;
   }
-  const Transform T_part_scan = pose().inverse();
+  const Transform T_part_scan = parts::demo_hat_pose().inverse();
   const double cell = order == kGridSorted ? 2.0 : 0.5;
   const auto key = [&](const Vec3& p) {
     const Vec3 q = T_part_scan * p;

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "simulators/parts/demo_hat.hpp"
 #include "simulators/parts/sheet_part.hpp"
 #include "simulators/usb_emulator.hpp"
 
@@ -66,12 +67,11 @@ inline std::unique_ptr<simulators::EmulatedUsbScanner> make_demo_scanner(long su
                                                                          double step_mm,
                                                                          int points_per_profile,
                                                                          double scan_s) {
-  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
   parts::ScanSimulationSettings dense;
   dense.point_count = surface_points;
   dense.noise_sigma_mm = 0.0;
-  auto surface = parts::simulate_scan(spec, {1.5, 0.8, 1.1, 0.4}, dense);
+  auto surface =
+      parts::simulate_scan(parts::demo_hat_profile(), parts::kDemoHatSpringbackDeg, dense);
   if (!surface) {
     std::fprintf(stderr, "%s\n", surface.message().c_str());
     return nullptr;

@@ -19,6 +19,7 @@
 
 #include "analysis/io/point_io.hpp"
 #include "simulators/parts/cad_profile.hpp"
+#include "simulators/parts/demo_hat.hpp"
 #include "simulators/parts/laser_scan.hpp"
 #include "simulators/parts/produced_part.hpp"
 #include "simulators/parts/sheet_part.hpp"
@@ -32,7 +33,7 @@ struct DemoOptions {
   std::string out_dir = "demo";
   std::string surface_path;    // when set: only write the produced part's dense, noise-free surface
   std::string production_cad;  // when set: scan this CAD part as produced instead of the hat
-  std::vector<double> springback_deg = {1.5, 0.8, 1.1, 0.4};  // one per bend of the hat
+  std::vector<double> springback_deg = kDemoHatSpringbackDeg;  // one per bend of the hat
   bool springback_given = false;
   long points = 0;         // 0: 60,000 for the hat, 200,000 for a production part
   double tilt_deg = 30.0;  // production part: two passes tilted by +-this about y (0: one pass)
@@ -52,32 +53,13 @@ std::vector<double> parse_list(const std::string& text) {
   return values;
 }
 
-// The demo hat profile: 25 mm brims, 30 mm walls, a 40 mm top, 60 degree bends of R4, 80 mm
-// wide. Sloped walls (not 90 degrees) so that a laser line looking along the sheet normal sees
-// every flange, as on a real station that scans a press part from above.
-ProfileSpec demo_profile() {
-  ProfileSpec spec = hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
-  return spec;
-}
-
-// A pose far from the CAD frame, so that the demo exercises the PCA + ICP global fit.
-Transform demo_pose() {
-  Transform T = Transform::Identity();
-  T.linear() = (Eigen::AngleAxisd(0.6, Vec3(0.2, 0.3, 1.0).normalized()) *
-                Eigen::AngleAxisd(-0.25, Vec3::UnitX()))
-                   .toRotationMatrix();
-  T.translation() = Vec3(120.0, -35.0, 410.0);
-  return T;
-}
-
 // The part as produced, densely and without noise: the surface the simulated scanner measures
 // (springscan-scanner-sim --part FILE) in the station demo.
 int write_surface(const DemoOptions& options) {
   ScanSimulationSettings dense;
   dense.point_count = 400000;
   dense.noise_sigma_mm = 0.0;
-  auto surface = simulate_scan(demo_profile(), options.springback_deg, dense);
+  auto surface = simulate_scan(demo_hat_profile(), options.springback_deg, dense);
   if (!surface) {
     std::cerr << "springscan-demo-part: " << surface.message() << '\n';
     return 1;
@@ -213,7 +195,7 @@ int write_production_part(const DemoOptions& options) {
   settings.point_count = options.points > 0 ? options.points : 200000;
   settings.noise_sigma_mm = options.noise_mm;
   settings.outlier_fraction = 0.005;
-  settings.T_scan_part = demo_pose();
+  settings.T_scan_part = demo_hat_pose();
   auto produced = produce_and_scan(options, settings);
   if (!produced) {
     std::cerr << "springscan-demo-part: " << produced.message() << '\n';
@@ -270,7 +252,7 @@ int run(const DemoOptions& options) {
     return options.surface_path.empty() ? write_production_part(options)
                                         : write_production_surface(options);
   if (!options.surface_path.empty()) return write_surface(options);
-  const ProfileSpec spec = demo_profile();
+  const ProfileSpec spec = demo_hat_profile();
   const std::string cad_path = options.out_dir + "/hat-profile.step";
   if (auto written = write_profile_cad(spec, cad_path); !written) {
     std::cerr << "springscan-demo-part: " << written.message() << '\n';
@@ -280,7 +262,7 @@ int run(const DemoOptions& options) {
   scan_settings.point_count = options.points > 0 ? options.points : 60000;
   scan_settings.noise_sigma_mm = options.noise_mm;
   scan_settings.outlier_fraction = 0.005;
-  scan_settings.T_scan_part = demo_pose();
+  scan_settings.T_scan_part = demo_hat_pose();
   auto scan = simulate_scan(spec, options.springback_deg, scan_settings);
   if (!scan) {
     std::cerr << "springscan-demo-part: " << scan.message() << '\n';

@@ -60,7 +60,7 @@ class HilCheckPartTest : public HilTest {
     parts::ScanSimulationSettings dense;
     dense.point_count = 150000;
     dense.noise_sigma_mm = 0.0;
-    auto surface = parts::simulate_scan(testing::demo_hat(),
+    auto surface = parts::simulate_scan(parts::demo_hat_profile(),
                                         std::vector<double>(kBends, kCheckSpringbackDeg), dense);
     ASSERT_TRUE(surface.ok()) << surface.message();
     laser_ = s.laser;

@@ -28,6 +28,7 @@
 #include "daemon/register_map.hpp"
 #include "daemon_process.hpp"
 #include "proto/springscan.pb.h"
+#include "simulators/parts/demo_hat.hpp"
 #include "simulators/parts/sheet_part.hpp"
 #include "simulators/plc_client.hpp"
 #include "simulators/usb_emulator.hpp"
@@ -36,13 +37,6 @@
 
 namespace springscan::daemon::testing {
 using namespace springscan::parts;  // test and demo parts (simulators/parts)
-
-/// The demo hat profile of simulators/demo_part_main.cpp (the shape of demo/hat-profile.step).
-inline parts::ProfileSpec demo_hat() {
-  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
-  return spec;
-}
 
 /// Within the demo's angle tolerance of 1 degree at every bend.
 inline const std::vector<double> kGoodSpringback{0.5, 0.3, 0.6, 0.2};
@@ -93,7 +87,7 @@ class HilTest : public ::testing::Test {
     parts::ScanSimulationSettings dense;  // the part's surface, densely and noise-free
     dense.point_count = 150000;
     dense.noise_sigma_mm = 0.0;
-    auto surface = parts::simulate_scan(demo_hat(), springback_deg, dense);
+    auto surface = parts::simulate_scan(demo_hat_profile(), springback_deg, dense);
     ASSERT_TRUE(surface.ok()) << surface.message();
     auto emulator = simulators::EmulatedUsbScanner::create(s, std::move(*surface));
     ASSERT_TRUE(emulator.ok()) << emulator.message();
@@ -170,7 +164,7 @@ class HilTest : public ::testing::Test {
   /// report's bend. The report numbers bends as the CAD segmentation found them, so the bend
   /// is matched by its axis to the nearest bend axis of the exact nominal model.
   static int path_index(const v1::Bend& bend) {
-    static const auto nominal = parts::profile_part_model(demo_hat(), {2000});
+    static const auto nominal = parts::profile_part_model(demo_hat_profile(), {2000});
     if (!nominal.ok()) return -1;
     const analysis::Vec3 p(bend.axis_point().x(), bend.axis_point().y(), bend.axis_point().z());
     int best = -1;

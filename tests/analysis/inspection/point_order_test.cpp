@@ -18,6 +18,7 @@
 #include "analysis/core/spatial_order.hpp"
 #include "analysis/inspection/pipeline.hpp"
 #include "simulators/parts/cad_profile.hpp"
+#include "simulators/parts/demo_hat.hpp"
 #include "simulators/parts/sheet_part.hpp"
 #include "tests/analysis/cad_test_util.hpp"
 #include "tests/analysis/under_sanitizer.hpp"
@@ -27,24 +28,6 @@ namespace {
 
 namespace parts = springscan::parts;
 constexpr double kDeg = std::numbers::pi / 180.0;
-const std::vector<double> kSpringbackDeg = {1.5, 0.8, 1.1, 0.4};
-
-// demo/hat-profile.step's profile and the demo scan's pose (simulators/demo_part_main.cpp).
-parts::ProfileSpec demo_hat() {
-  parts::ProfileSpec spec = parts::hat_profile(25.0, 30.0, 40.0, 60.0, 4.0);
-  spec.width_mm = 80.0;
-  return spec;
-}
-
-Transform demo_pose() {
-  Transform T = Transform::Identity();
-  T.linear() = (Eigen::AngleAxisd(0.6, Vec3(0.2, 0.3, 1.0).normalized()) *
-                Eigen::AngleAxisd(-0.25, Vec3::UnitX()))
-                   .toRotationMatrix();
-  T.translation() = Vec3(120.0, -35.0, 410.0);
-  return T;
-}
-
 Transform report_transform(const v1::GlobalFit& fit) {
   Transform T = Transform::Identity();
   for (int r = 0; r < 4; ++r)
@@ -61,15 +44,15 @@ PointCloud reordered(const PointCloud& scan, const std::vector<std::size_t>& ord
 TEST(PointOrder, DemoHatKeepsItsOrientationAndBendsInEveryOrder) {
   testing::TempDir dir;
   const std::string path = dir.file("hat-profile.step");
-  ASSERT_TRUE(parts::write_profile_cad(demo_hat(), path));
+  ASSERT_TRUE(parts::write_profile_cad(parts::demo_hat_profile(), path));
   auto model = load_part_model(path);
   ASSERT_TRUE(model) << model.message();
   parts::ScanSimulationSettings s;
   s.point_count = testing::kUnderSanitizer ? 20000 : 60000;
   s.noise_sigma_mm = 0.02;
   s.outlier_fraction = 0.005;
-  s.T_scan_part = demo_pose();
-  auto scan = parts::simulate_scan(demo_hat(), kSpringbackDeg, s);
+  s.T_scan_part = parts::demo_hat_pose();
+  auto scan = parts::simulate_scan(parts::demo_hat_profile(), parts::kDemoHatSpringbackDeg, s);
   ASSERT_TRUE(scan) << scan.message();
   const std::size_t n = scan->size();
   std::vector<std::size_t> file(n);
@@ -80,7 +63,7 @@ TEST(PointOrder, DemoHatKeepsItsOrientationAndBendsInEveryOrder) {
   std::shuffle(shuffled.begin(), shuffled.end(), rng);
   std::vector<std::size_t> space;
   for (std::uint32_t i : spatial_order(scan->points, 1)) space.push_back(i);
-  const Transform truth = demo_pose().inverse();
+  const Transform truth = parts::demo_hat_pose().inverse();
   const std::vector<std::pair<std::string, std::vector<std::size_t>>> orders = {
       {"file", file}, {"reversed", reversed}, {"shuffled", shuffled}, {"space", space}};
   const auto apart_deg = [](const Transform& a, const Transform& b) {
@@ -99,7 +82,8 @@ TEST(PointOrder, DemoHatKeepsItsOrientationAndBendsInEveryOrder) {
     EXPECT_FALSE(r.global_fit().ambiguous()) << name;
     ASSERT_EQ(r.bends_size(), 4) << name;
     for (int b = 0; b < 4; ++b)
-      EXPECT_NEAR(r.bends(b).springback_deg(), kSpringbackDeg[static_cast<std::size_t>(b)], 0.05)
+      EXPECT_NEAR(r.bends(b).springback_deg(),
+                  parts::kDemoHatSpringbackDeg[static_cast<std::size_t>(b)], 0.05)
           << name << " bend " << b;
     // A scan in no spatial order is taken in one canonical space order: the same report for the
     // file's order, reversed or shuffled. One in space order already is taken as it came.
