@@ -3,9 +3,8 @@
 // as produced and the pose the demo scan is taken in. One definition for the demo program, the
 // hardware-in-the-loop rig, the soak and analysis benches and the tests that rebuild the demo.
 
-#include <vector>
-
 #include <Eigen/Geometry>
+#include <vector>
 
 #include "analysis/core/point_cloud.hpp"
 #include "simulators/parts/sheet_profile.hpp"
