@@ -149,7 +149,7 @@ std::vector<Vec2> with_company(std::vector<Vec2> p, double spacing) {
   constexpr double kRadius = 3.0;  // spacings
   const auto needed = static_cast<int>(std::ceil(0.5 * std::numbers::pi * kRadius * kRadius / 2.0));
   const double r = kRadius * spacing, r2 = r * r;
-  if (!(r > 0.0)) return p;
+  if (!(r > 0.0 && std::isfinite(r))) return p;
   std::sort(p.begin(), p.end(), [](const Vec2& a, const Vec2& b) { return a.x() < b.x(); });
   std::vector<Vec2> kept;
   kept.reserve(p.size());
@@ -271,8 +271,10 @@ std::optional<EdgeDeviation> measure_edge(const EdgeInput& in, const EdgeLine& l
   // The line of the hull lies below the edge by about one point's share of the band's area
   // spread over its length: band_mm / n.
   // The band's points lie inside the sheet, band_mm deep: its density gives the spacing.
-  band = with_company(std::move(band),
-                      std::sqrt(length * st.band_mm / static_cast<double>(band.size())));
+  // (The spacing first: the order in which a call's arguments are evaluated is unspecified, and
+  // clang moved `band` out before reading its size, a spacing of 1/0.)
+  const double spacing = std::sqrt(length * st.band_mm / static_cast<double>(band.size()));
+  band = with_company(std::move(band), spacing);
   if (band.size() < min_count) return std::nullopt;
   Vec2 scan_line = upper_hull_line(band);
   scan_line[0] += st.band_mm / static_cast<double>(band.size());
