@@ -137,14 +137,16 @@ std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int 
     if (a.point.z() != b.point.z()) return a.point.z() < b.point.z();
     return a.index < b.index;
   };
-  // Each block sorts the cells (runs of one key) that start in it, to their end.
+  // Each block sorts the cells (runs of one key) that start in it, to their end. The runs are
+  // found in `keyed`, which no block writes: a block reading `entries` at its start would read
+  // the cell the block before it is sorting (a data race, TSan).
   std::vector<std::uint32_t> order(entries.size());
   parallel_blocks(entries.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::size_t run = begin;
-    while (run > 0 && run < entries.size() && entries[run].key == entries[run - 1].key) ++run;
+    while (run > 0 && run < keyed.size() && keyed[run].key == keyed[run - 1].key) ++run;
     while (run < end) {
       std::size_t next = run + 1;
-      while (next < entries.size() && entries[next].key == entries[run].key) ++next;
+      while (next < keyed.size() && keyed[next].key == keyed[run].key) ++next;
       const auto first = entries.begin() + static_cast<std::ptrdiff_t>(run);
       std::sort(first, entries.begin() + static_cast<std::ptrdiff_t>(next), by_coordinates);
       for (std::size_t k = run; k < next; ++k) order[k] = entries[k].index;
