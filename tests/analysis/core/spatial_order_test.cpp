@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <random>
 #include <tuple>
@@ -10,8 +11,8 @@
 namespace springscan::analysis {
 namespace {
 
-// Oracle: the Morton code of each point's cell by one bit at a time, and a stable sort by it.
-std::vector<std::uint32_t> by_sorting(const std::vector<Vec3>& points) {
+// Oracle: the Morton code of each point's cell, one bit at a time.
+std::vector<std::uint64_t> morton_keys(const std::vector<Vec3>& points) {
   Vec3 lo = points[0], hi = points[0];
   for (const Vec3& p : points) {
     lo = lo.cwiseMin(p);
@@ -27,6 +28,12 @@ std::vector<std::uint32_t> by_sorting(const std::vector<Vec3>& points) {
       for (int bit = 0; bit < kSpatialOrderBits; ++bit)
         key[i] |= ((cell >> bit) & 1u) << (3 * bit + axis);
     }
+  return key;
+}
+
+// Oracle: a stable sort by the Morton code of each point's cell.
+std::vector<std::uint32_t> by_sorting(const std::vector<Vec3>& points) {
+  const std::vector<std::uint64_t> key = morton_keys(points);
   std::vector<std::uint32_t> order(points.size());
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(),
@@ -139,6 +146,28 @@ TEST(SpatialOrder, CanonicalOrderDependsOnThePointsAlone) {
   // Already canonical: a stable sort by cell leaves it as it is.
   EXPECT_EQ(by_sorting(canonical), identity);
   EXPECT_TRUE(canonical_order({}).empty());
+}
+
+// canonical_order against a comparison sort by (cell, x, y, z, input index), with points whose x
+// differ in the last bit only, equal x, and repeated points (CanonicalOrderDependsOnThePointsAlone
+// checks only that the order does not depend on the input's; this, what the order is).
+TEST(SpatialOrder, CanonicalOrderIsTheSortByCellThenCoordinates) {
+  std::vector<Vec3> points = shuffled_sheet(20'000, 9);
+  for (std::size_t i = 0; i < points.size(); i += 5) points[i] = points[i].array().round();
+  for (std::size_t i = 1; i + 1 < points.size(); i += 7) {
+    points[i + 1] = points[i];
+    points[i + 1].x() = std::nextafter(points[i].x(), 1e9);    // one ulp apart
+    if (i % 3 == 1) points[i + 1].y() = points[i].y() + 1e-3;  // equal x, y apart
+  }
+  const std::vector<std::uint64_t> key = morton_keys(points);
+  std::vector<std::uint32_t> truth(points.size());
+  std::iota(truth.begin(), truth.end(), 0u);
+  std::sort(truth.begin(), truth.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const Vec3 &p = points[a], &q = points[b];
+    return std::tie(key[a], p.x(), p.y(), p.z(), a) < std::tie(key[b], q.x(), q.y(), q.z(), b);
+  });
+  EXPECT_EQ(canonical_order(points, 1), truth);
+  EXPECT_EQ(canonical_order(points, 2), truth);
 }
 
 }  // namespace
