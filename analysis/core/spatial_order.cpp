@@ -114,7 +114,8 @@ std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int th
   return indices_of(morton_sorted(points, threads), threads);
 }
 
-std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads) {
+std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads,
+                                           std::vector<Vec3>* points_in_order) {
   if (points.empty()) return {};
   const std::vector<Keyed> keyed = morton_sorted(points, threads);
   // The points copied in cell order, so that sorting a cell reads neighbouring memory (its
@@ -141,6 +142,7 @@ std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int 
   // found in `keyed`, which no block writes: a block reading `entries` at its start would read
   // the cell the block before it is sorting (a data race, TSan).
   std::vector<std::uint32_t> order(entries.size());
+  if (points_in_order) points_in_order->resize(entries.size());
   parallel_blocks(entries.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::size_t run = begin;
     while (run > 0 && run < keyed.size() && keyed[run].key == keyed[run - 1].key) ++run;
@@ -150,6 +152,8 @@ std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int 
       const auto first = entries.begin() + static_cast<std::ptrdiff_t>(run);
       std::sort(first, entries.begin() + static_cast<std::ptrdiff_t>(next), by_coordinates);
       for (std::size_t k = run; k < next; ++k) order[k] = entries[k].index;
+      if (points_in_order)
+        for (std::size_t k = run; k < next; ++k) (*points_in_order)[k] = entries[k].point;
       run = next;
     }
   });
