@@ -107,15 +107,8 @@ std::vector<std::uint32_t> indices_of(const std::vector<Keyed>& keyed, int threa
   return order;
 }
 
-}  // namespace
-
-std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
-  if (points.empty()) return {};
-  return indices_of(morton_sorted(points, threads), threads);
-}
-
-std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads,
-                                           std::vector<Vec3>* points_in_order) {
+// canonical_order, and the points in that order when `with_points`.
+OrderedPoints canonical(const std::vector<Vec3>& points, int threads, bool with_points) {
   if (points.empty()) return {};
   const std::vector<Keyed> keyed = morton_sorted(points, threads);
   // The points copied in cell order, so that sorting a cell reads neighbouring memory (its
@@ -141,8 +134,8 @@ std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int 
   // Each block sorts the cells (runs of one key) that start in it, to their end. The runs are
   // found in `keyed`, which no block writes: a block reading `entries` at its start would read
   // the cell the block before it is sorting (a data race, TSan).
-  std::vector<std::uint32_t> order(entries.size());
-  if (points_in_order) points_in_order->resize(entries.size());
+  OrderedPoints out{std::vector<std::uint32_t>(entries.size()), {}};
+  if (with_points) out.points.resize(entries.size());
   parallel_blocks(entries.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
     std::size_t run = begin;
     while (run > 0 && run < keyed.size() && keyed[run].key == keyed[run - 1].key) ++run;
@@ -151,13 +144,28 @@ std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int 
       while (next < keyed.size() && keyed[next].key == keyed[run].key) ++next;
       const auto first = entries.begin() + static_cast<std::ptrdiff_t>(run);
       std::sort(first, entries.begin() + static_cast<std::ptrdiff_t>(next), by_coordinates);
-      for (std::size_t k = run; k < next; ++k) order[k] = entries[k].index;
-      if (points_in_order)
-        for (std::size_t k = run; k < next; ++k) (*points_in_order)[k] = entries[k].point;
+      for (std::size_t k = run; k < next; ++k) out.order[k] = entries[k].index;
+      if (with_points)
+        for (std::size_t k = run; k < next; ++k) out.points[k] = entries[k].point;
       run = next;
     }
   });
-  return order;
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int threads) {
+  if (points.empty()) return {};
+  return indices_of(morton_sorted(points, threads), threads);
+}
+
+std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads) {
+  return canonical(points, threads, false).order;
+}
+
+OrderedPoints canonically_ordered(const std::vector<Vec3>& points, int threads) {
+  return canonical(points, threads, true);
 }
 
 bool spatially_coherent(const std::vector<Vec3>& points) {

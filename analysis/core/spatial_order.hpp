@@ -33,11 +33,18 @@ std::vector<std::uint32_t> spatial_order(const std::vector<Vec3>& points, int th
 /// came in (points with equal coordinates keep their input order; they are the same point).
 /// The analysis takes its scan in this order once (analysis/inspection/pipeline.cpp), so that
 /// its index-based samples draw the same points, and the same report comes out, whatever order
-/// the scan came in. `points_in_order`, when given, receives the points in that order (what a
-/// gather by the result gives, from the copy the sort reads: one pass of cache misses instead of
-/// two). Thread safety: a pure function; the result does not depend on `threads`.
-std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads = 0,
-                                           std::vector<Vec3>* points_in_order = nullptr);
+/// the scan came in. Thread safety: a pure function; the result does not depend on `threads`.
+std::vector<std::uint32_t> canonical_order(const std::vector<Vec3>& points, int threads = 0);
+
+/// A permutation and the points in its order.
+struct OrderedPoints {
+  std::vector<std::uint32_t> order;  ///< points[k] is the input's point order[k]
+  std::vector<Vec3> points;
+};
+
+/// canonical_order and the points in that order, taken from the copy its sort reads (a gather by
+/// the order afterwards would miss the cache on every point a second time).
+OrderedPoints canonically_ordered(const std::vector<Vec3>& points, int threads = 0);
 
 /// True when the points are in a spatially coherent order already (a scan in scanner lines, a
 /// grid-sorted one): the median distance between consecutive points, over up to 1024 pairs

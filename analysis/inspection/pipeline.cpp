@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <limits>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 #include "analysis/core/kdtree.hpp"
 #include "analysis/core/parallel.hpp"
@@ -468,18 +470,19 @@ void gather(const std::vector<T>& from, const std::vector<std::uint32_t>& indice
   });
 }
 
-// The scan in canonical_order (scan_order, the points' permutation, set), on `threads` threads.
-// The points come from the copy the order's sort made (1M points' gather is some 20 ms on one
-// thread), the other attributes gathered.
-PointCloud in_canonical_order(const PointCloud& cloud, std::vector<std::uint32_t>& scan_order,
-                              int threads) {
+// The scan in canonical_order, and that order, on `threads` threads. The points come from the
+// copy the order's sort made (1M points' gather is some 20 ms on one thread), the other
+// attributes are gathered.
+std::pair<PointCloud, std::vector<std::uint32_t>> in_canonical_order(const PointCloud& cloud,
+                                                                     int threads) {
+  OrderedPoints ordered = canonically_ordered(cloud.points, threads);
   PointCloud out;
-  scan_order = canonical_order(cloud.points, threads, &out.points);
-  gather(cloud.normals, scan_order, out.normals, threads);
-  gather(cloud.scalars, scan_order, out.scalars, threads);
-  gather(cloud.colors, scan_order, out.colors, threads);
-  gather(cloud.face_ids, scan_order, out.face_ids, threads);
-  return out;
+  out.points = std::move(ordered.points);
+  gather(cloud.normals, ordered.order, out.normals, threads);
+  gather(cloud.scalars, ordered.order, out.scalars, threads);
+  gather(cloud.colors, ordered.order, out.colors, threads);
+  gather(cloud.face_ids, ordered.order, out.face_ids, threads);
+  return {std::move(out), std::move(ordered.order)};
 }
 
 // to[order[k]] = from[k] on `threads` threads (order: a permutation); nothing for an attribute
@@ -531,7 +534,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   std::vector<std::uint32_t> scan_order;
   PointCloud reordered;
   if (!spatially_coherent(input_scan.points))
-    reordered = in_canonical_order(input_scan, scan_order, config->threads);
+    std::tie(reordered, scan_order) = in_canonical_order(input_scan, config->threads);
   const PointCloud& scan = scan_order.empty() ? input_scan : reordered;
   // 3. Reduce: voxel centroids of the scan for the fit, k-center of both (paper §2).
   auto reduced = reduce(scan, model.samples, config->reduction);

@@ -167,11 +167,12 @@ TEST(SpatialOrder, CanonicalOrderIsTheSortByCellThenCoordinates) {
     return std::tie(key[a], p.x(), p.y(), p.z(), a) < std::tie(key[b], q.x(), q.y(), q.z(), b);
   });
   EXPECT_EQ(canonical_order(points, 1), truth);
-  std::vector<Vec3> points_in_order;
-  EXPECT_EQ(canonical_order(points, 2, &points_in_order), truth);
-  ASSERT_EQ(points_in_order.size(), truth.size());
+  const OrderedPoints ordered = canonically_ordered(points, 2);
+  EXPECT_EQ(ordered.order, truth);
+  ASSERT_EQ(ordered.points.size(), truth.size());
   for (std::size_t k = 0; k < truth.size(); ++k)
-    ASSERT_EQ(points_in_order[k], points[truth[k]]) << k;
+    ASSERT_EQ(ordered.points[k], points[truth[k]]) << k;
+  EXPECT_TRUE(canonically_ordered({}).points.empty());
 }
 
 }  // namespace
