@@ -453,6 +453,29 @@ class SurfaceMisfit {
 // the samples' own asymmetry).
 constexpr double kTurnEvidenceSigmas = 5.0;
 
+// The datums the scan contradicts at the frame T: each looked for as the capture round does (its
+// feature up to capture_mm off, every stride-th point), and not found where the scan shows
+// something else instead (a skin facing away from a pad, skin inside a hole's outline). A datum
+// merely out of the scan contradicts nothing. Their names, comma separated.
+std::string contradicted_datums(const std::vector<Vec3>& scan, const std::vector<Vec3>& normals,
+                                const Transform& T, const std::vector<Datum>& datums,
+                                const DatumAlignmentSettings& settings) {
+  const double capture = std::max(settings.capture_mm, settings.search_mm);
+  std::vector<double> reach;
+  for (const Datum& d : datums) reach.push_back(datum_detail::capture_radius(d, capture) + capture);
+  const std::size_t stride =
+      std::max<std::size_t>(1, (scan.size() + kCapturePoints - 1) / kCapturePoints);
+  const std::vector<FeaturePoints> near =
+      within_reach(scan, normals, T, datums, reach, settings.threads, stride);
+  std::string names;
+  for (std::size_t k = 0; k < datums.size(); ++k) {
+    const FeatureFit f = datum_detail::capture_feature(
+        datums[k], near_points(near[k], T, datums[k], reach[k]), capture, settings);
+    if (!f.measured && f.contradicted) names += (names.empty() ? "" : ", ") + datums[k].name;
+  }
+  return names;
+}
+
 }  // namespace
 
 Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
@@ -476,11 +499,14 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
   if (out.achieved) return out;
   // A near-symmetric part's best fit may lie turned half round (the side panel's, seen all
   // round): its datums are then where the scan shows other features or none. A half turn of
-  // the part from which every datum is measured is taken only when the whole surface fits it
-  // better than the other half at the same pose too (a part whose halves both carry the datum
-  // features measures every datum on the twins of the other half: the datums alone do not
-  // tell the halves apart); of several, the one the surface fits best. Else the best fit's
-  // failure, and why a half turn that measured was not taken.
+  // the part from which every datum is measured is weighed on two kinds of evidence against the
+  // other half at the same pose: the datums (the scan contradicts one of them there: a skin
+  // facing away from a pad, skin where a hole should be) and the whole surface (its fit, in
+  // standard errors of the paired difference). The datums decide when they tell the halves
+  // apart and the surface does not favour the other half; else the surface decides (a part
+  // whose halves both carry the datum features, or whose datum is only out of the scan, is not
+  // turned on its datums alone). Of several taken, the one the surface fits best. Else the best
+  // fit's failure, and why a half turn that measured was not taken.
   std::optional<SurfaceMisfit> misfit;
   std::optional<DatumAlignmentResult> taken;
   double taken_misfit = 0.0;
@@ -492,8 +518,9 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
     if (!misfit) misfit.emplace(model, scan);
     // The turned frame against the other half at the same datum pose (H is its own inverse):
     // springback's pull on the best fit weighs in neither.
+    const Transform other_half = H * turned.T_cad_scan;
     const std::vector<double> here = (*misfit)(turned.T_cad_scan);
-    const std::vector<double> there = (*misfit)(H * turned.T_cad_scan);
+    const std::vector<double> there = (*misfit)(other_half);
     // The paired difference (the other half's distance less this one's, point by point): its
     // mean in standard errors. Springback far from the features is capped alike in both, and a
     // symmetric part's halves fit alike: the difference is then the samples' noise.
@@ -507,14 +534,24 @@ Expected<DatumAlignmentResult> align_to_datums(const std::vector<Vec3>& scan,
     const double mean = sum / n;
     const double standard_error = std::sqrt(std::max(sum2 / n - mean * mean, 0.0) / n);
     const double sigmas = mean / std::max(standard_error, 1e-12);
-    if (!(sigmas > kTurnEvidenceSigmas)) {
-      char text[300];
-      std::snprintf(text, sizeof text,
-                    "; turned half round every datum is measured, but the surface fits that half "
-                    "no better than the other (%.4f mm against %.4f mm, %.1f standard errors): "
-                    "the part's halves are not told apart",
-                    m, other, sigmas);
-      if (refused.empty()) refused = text;
+    const std::string against =
+        contradicted_datums(scan, scan_normals, other_half, datums, settings);
+    const bool by_surface = sigmas > kTurnEvidenceSigmas;
+    const bool by_datums = !against.empty() && sigmas > -kTurnEvidenceSigmas;
+    if (!by_surface && !by_datums) {
+      char fit[120];
+      std::snprintf(fit, sizeof fit, "%.4f mm against %.4f mm, %.1f standard errors", m, other,
+                    sigmas);
+      const std::string why =
+          against.empty()
+              ? "; turned half round every datum is measured, but the surface fits that half no "
+                "better than the other (" +
+                    std::string(fit) +
+                    ") and no datum tells them apart: the part's halves are not told apart"
+              : "; turned half round every datum is measured and the other half contradicts " +
+                    against + ", but the surface fits the other half better (" + fit +
+                    "): the evidence conflicts";
+      if (refused.empty()) refused = why;
       continue;
     }
     if (taken && m >= taken_misfit) continue;

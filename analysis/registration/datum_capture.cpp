@@ -115,17 +115,34 @@ Datum on_plane(const Datum& d, const Plane& p) {
   return out;
 }
 
-FeatureFit not_found(const std::string& why) {
+FeatureFit not_found(const std::string& why, bool contradicted = false) {
   FeatureFit f;
   f.failure = why;
+  f.contradicted = contradicted;
   return f;
+}
+
+// At least min_points scan points within [r_in, r_out] of the datum's normal line and within
+// +-capture along it that face away from its normal: the scan sees another skin there.
+bool skin_facing_away(const Datum& d, const FeaturePoints& near, double r_in, double r_out,
+                      double capture, std::size_t min_points) {
+  if (near.normals.empty()) return false;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < near.points.size(); ++i) {
+    const Vec3 v = near.points[i] - d.point;
+    const double h = v.dot(d.normal), rho = (v - h * d.normal).norm();
+    if (std::abs(h) <= capture && rho >= r_in && rho <= r_out && near.normals[i].dot(d.normal) < 0)
+      ++n;
+  }
+  return n >= min_points;
 }
 
 FeatureFit capture_pad(const Datum& d, const FeaturePoints& near, double capture,
                        const DatumAlignmentSettings& s) {
   const Plane p = dominant_plane(d, near, 0.0, d.radius_mm, capture, s.min_points);
   if (!p.found)
-    return not_found("no skin facing the pad within " + std::to_string(capture) + " mm");
+    return not_found("no skin facing the pad within " + std::to_string(capture) + " mm",
+                     skin_facing_away(d, near, 0.0, d.radius_mm, capture, s.min_points));
   // Where the found plane crosses the pad's normal line: what the pad fixes.
   FeatureFit f;
   f.measured = true;
@@ -155,7 +172,10 @@ FeatureFit capture_outline(const Datum& d, const FeaturePoints& near, double cap
   const double half = slot ? 0.5 * (d.length_mm - d.diameter_mm) : 0.0;
   const double reach = r + half;
   const Plane p = dominant_plane(d, near, reach, reach + capture + kRingMm, capture, s.min_points);
-  if (!p.found) return not_found("no skin around it within " + std::to_string(capture) + " mm");
+  if (!p.found)
+    return not_found(
+        "no skin around it within " + std::to_string(capture) + " mm",
+        skin_facing_away(d, near, reach, reach + capture + kRingMm, capture, s.min_points));
   const Datum dp = on_plane(d, p);
   Vec3 e1, e2;
   complete_basis(dp.normal, e1, e2);
@@ -217,7 +237,8 @@ FeatureFit capture_outline(const Datum& d, const FeaturePoints& near, double cap
   const int stray = std::max(2, static_cast<int>(kStrayShare * static_cast<double>(inside.size())));
   if (least > stray)
     return not_found("no empty outline of it in the seen skin within " + std::to_string(capture) +
-                     " mm (" + std::to_string(least) + " cells of skin inside at best)");
+                         " mm (" + std::to_string(least) + " cells of skin inside at best)",
+                     true);
   if (best_ring < kMinRingShare)
     return not_found("no outline of it in the seen skin within " + std::to_string(capture) +
                      " mm (its ring " + std::to_string(static_cast<int>(100 * best_ring)) +

@@ -18,7 +18,11 @@ struct FeaturePoints {
 /// One feature measured (method in datum.hpp step 1).
 struct FeatureFit {
   bool measured = false;
-  std::string failure;         ///< why not, for the error naming the datum
+  std::string failure;  ///< why not, for the error naming the datum
+  /// Not measured, and the scan shows something else where the feature should be (a skin facing
+  /// away on a pad, skin inside a hole's or slot's outline): evidence that the frame is wrong, not
+  /// only that the scan lacks the feature (set by the capture round only).
+  bool contradicted = false;
   Vec3 point = Vec3::Zero();   ///< the feature's point: pad foot, hole or slot centre, edge
   Vec3 normal = Vec3::Zero();  ///< pads: the plane's normal
   double diameter_mm = 0.0;    ///< holes: diameter; slots: width

@@ -11,6 +11,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <numbers>
 #include <random>
 
@@ -298,9 +299,11 @@ struct Outcome {
   std::string measured_by;
 };
 
-Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseDatums& cd,
-                 bool all_round, bool noisy, unsigned seed) {
-  Outcome out;
+// The produced part of `c` (every other bend sprung back 1-3 deg, drawn from `rng`) scanned in
+// the passes of `all_round`, sigma 0.02 or (noisy) 0.05 with 2 % outliers, at a random placement
+// (returned: the true scan-from-CAD pose); an empty scan on failure.
+Transform scan_case(const ProductionCase& c, const parts::CadPart& cad, const CaseDatums& cd,
+                    bool all_round, bool noisy, unsigned seed, PointCloud& scan) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> springback(1.0, 3.0);
   std::vector<double> sb;
@@ -310,7 +313,7 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
   ps.root_flange = cd.root;
   auto part = parts::make_produced_part(cad.model, cad.shape, sb, ps);
   EXPECT_TRUE(part) << part.message();
-  if (!part) return out;
+  if (!part) return Transform::Identity();
   Mat3 R;  // flange frame -> part frame
   R << cd.along, cd.normal.cross(cd.along), cd.normal;
   const std::vector<Vec3> directions = view(all_round, c.tilt_about_length);
@@ -331,8 +334,16 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
                             Eigen::AngleAxisd(0.05, Vec3::UnitX()).toRotationMatrix() *
                             R.transpose();  // the flange faces the scanner
   ls.T_scan_part.translation() = Vec3(x, y, 300.0);
+  if (!testing::scan_in_passes(*part, ls, R, directions, seed, scan)) scan = PointCloud{};
+  return ls.T_scan_part;
+}
+
+Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseDatums& cd,
+                 bool all_round, bool noisy, unsigned seed) {
+  Outcome out;
   PointCloud scan;
-  if (!testing::scan_in_passes(*part, ls, R, directions, seed, scan)) return out;
+  const Transform T_scan_part = scan_case(c, cad, cd, all_round, noisy, seed, scan);
+  if (scan.points.empty()) return out;
   DatumAlignmentSettings ds;
   ds.datums = cd.datums;
   v1::AnalysisSettings settings;
@@ -345,13 +356,13 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
   for (const Datum& d : ds.datums) points.push_back(d.point);
   points.push_back(cd.centroid);
   std::tie(out.best_rotation_deg, out.best_shift_mm) = testing::datum_frame_error(
-      testing::from_row_major(outcome->report.global_fit().transform()) * ls.T_scan_part, points);
+      testing::from_row_major(outcome->report.global_fit().transform()) * T_scan_part, points);
   EXPECT_TRUE(al.achieved()) << c.name << (all_round ? " all-round" : " one-sided") << ": "
                              << al.failure() << " (best fit " << out.best_rotation_deg << " deg, "
                              << out.best_shift_mm << " mm)";
   if (!al.achieved()) return out;
   std::tie(out.rotation_deg, out.shift_mm) =
-      testing::datum_frame_error(testing::from_row_major(al.transform()) * ls.T_scan_part, points);
+      testing::datum_frame_error(testing::from_row_major(al.transform()) * T_scan_part, points);
   std::tie(out.floor_rotation_deg, out.floor_shift_mm) =
       testing::datum_noise_floor(al, ds.datums, points);
   for (const auto& d : al.datums())
@@ -390,6 +401,64 @@ TEST_P(DatumProductionPart, FrameWithinBoundsOfTheConstruction) {
         o.rotation_deg, o.shift_mm, rot_bound, shift_bound, o.measured_by.c_str());
     EXPECT_LE(o.rotation_deg, rot_bound) << c.name;
     EXPECT_LE(o.shift_mm, shift_bound) << c.name;
+  }
+}
+
+// The side panel seen one-sided at sigma 0.05 with 2 % outliers, its best fit turned half round
+// about each of the part's principal axes (the held-out miss of seed 20261207: the best fit lay
+// so, and the surface favoured the turn back by 2.8 standard errors, not 5): the datums, which
+// tell the halves apart (slot B has no twin on the other wall, the pads' skin faces away there),
+// turn it back. The frame within the bound of the production cases. Dev seeds 7 and 8
+// (SPRINGSCAN_DATUM_SEED replaces them: the held-out runs); under the sanitizers one seed, one
+// turn, a quarter of the points.
+TEST(DatumProductionSidePanel, BestFitTurnedHalfRoundIsTurnedBack) {
+  ProductionCase c = production_cases().front();
+  ASSERT_EQ(c.name, "SidePanel");
+  const parts::CadPart& cad = parts::testing::loaded_part(c.file);
+  const PartModel& model = testing::exact_model(cad);
+  const CaseDatums cd = case_datums(c, cad);
+  ASSERT_EQ(cd.datums.size(), 6u);
+  Vec3 centroid = Vec3::Zero();
+  for (const Vec3& p : model.samples.points)
+    centroid += p / static_cast<double>(model.samples.size());
+  Mat3 cov = Mat3::Zero();
+  for (const Vec3& p : model.samples.points) cov += (p - centroid) * (p - centroid).transpose();
+  const Mat3 axes = Eigen::SelfAdjointEigenSolver<Mat3>(cov).eigenvectors();
+  std::vector<Vec3> points;
+  for (const Datum& d : cd.datums) points.push_back(d.point);
+  points.push_back(cd.centroid);
+  DatumAlignmentSettings ds;
+  ds.datums = cd.datums;
+  std::vector<unsigned> seeds = {7, 8};
+  int turns = 3;
+  if (testing::kUnderSanitizer) seeds.resize(1), turns = 1, c.points /= 4;
+  if (const char* env = std::getenv("SPRINGSCAN_DATUM_SEED"))
+    seeds = {static_cast<unsigned>(std::strtoul(env, nullptr, 10))};
+  for (unsigned seed : seeds) {
+    PointCloud scan;
+    const Transform T_scan_part = scan_case(c, cad, cd, false, true, seed, scan);
+    ASSERT_FALSE(scan.points.empty());
+    for (int k = 0; k < turns; ++k) {
+      Transform H = Transform::Identity();
+      H.linear() = Eigen::AngleAxisd(std::numbers::pi, axes.col(k)).toRotationMatrix();
+      H.translation() = centroid - H.linear() * centroid;
+      const Transform start = H * T_scan_part.inverse();
+      auto r = align_to_datums(scan.points, scan.normals, start, model, ds);
+      ASSERT_TRUE(r) << r.message();
+      ASSERT_TRUE(r->achieved) << "seed " << seed << ", turn " << k << ": " << r->failure;
+      ASSERT_FALSE(r->rounds.empty());
+      EXPECT_EQ(r->rounds.front().stage, "half turn") << "seed " << seed << ", turn " << k;
+      v1::Alignment al;
+      alignment_to_proto(start, &*r, &al);
+      const auto [rot, shift] = testing::datum_frame_error(r->T_cad_scan * T_scan_part, points);
+      const auto [floor_rot, floor_shift] = testing::datum_noise_floor(al, ds.datums, points);
+      const double rot_bound = std::max(0.01, 3.0 * floor_rot);
+      const double shift_bound = std::max(0.04, 3.0 * floor_shift);
+      std::printf("seed %u, turn %d: %.4f deg, %.4f mm (bound %.4f deg, %.4f mm)\n", seed, k, rot,
+                  shift, rot_bound, shift_bound);
+      EXPECT_LE(rot, rot_bound) << "seed " << seed << ", turn " << k;
+      EXPECT_LE(shift, shift_bound) << "seed " << seed << ", turn " << k;
+    }
   }
 }
 
