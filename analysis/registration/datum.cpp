@@ -32,6 +32,7 @@ constexpr double kParallelDot = 0.999;  // a flange's normal this close to the d
 // The capture rounds read at most this many scan points (every stride-th): a coarse solve
 // needs a few points per square millimetre of skin, not the laser's full density.
 constexpr std::size_t kCapturePoints = 200'000;
+constexpr std::size_t kMinCapturePoints = 6;  // a feature's points in the strided capture
 
 std::optional<Error> bad(std::string_view context, const Datum& d, const std::string& what) {
   return fail(ErrorCode::kInvalidSettings,
@@ -453,6 +454,16 @@ class SurfaceMisfit {
 // the samples' own asymmetry).
 constexpr double kTurnEvidenceSigmas = 5.0;
 
+// The capture reads every stride-th scan point: a feature needs that share of min_points there
+// (at least kMinCapturePoints; the search round, on every point, asks for all of them). A small
+// pad of a sparse scan (the front panel's 2.5 mm pads, 50 points in all) held fewer than 12 of
+// the capture's third.
+DatumAlignmentSettings strided(DatumAlignmentSettings s, std::size_t stride) {
+  s.min_points =
+      std::min(s.min_points, std::max(kMinCapturePoints, (s.min_points + stride - 1) / stride));
+  return s;
+}
+
 // The datums the scan contradicts at the frame T: each looked for as the capture round does (its
 // feature up to capture_mm off, every stride-th point), and not found where the scan shows
 // something else instead (a skin facing away from a pad, skin inside a hole's outline). A datum
@@ -469,8 +480,9 @@ std::string contradicted_datums(const std::vector<Vec3>& scan, const std::vector
       within_reach(scan, normals, T, datums, reach, settings.threads, stride);
   std::string names;
   for (std::size_t k = 0; k < datums.size(); ++k) {
-    const FeatureFit f = datum_detail::capture_feature(
-        datums[k], near_points(near[k], T, datums[k], reach[k]), capture, settings);
+    const FeatureFit f =
+        datum_detail::capture_feature(datums[k], near_points(near[k], T, datums[k], reach[k]),
+                                      capture, strided(settings, stride));
     if (!f.measured && f.contradicted) names += (names.empty() ? "" : ", ") + datums[k].name;
   }
   return names;
@@ -596,6 +608,7 @@ DatumAlignmentResult align_from(const std::vector<Vec3>& scan,
   if (capture)
     candidates = within_reach(scan, scan_normals, T_cad_scan_best, datums, capture_reach,
                               settings.threads, stride);
+  const DatumAlignmentSettings capture_settings = strided(settings, stride);
   DatumAlignmentResult out;
   out.T_cad_scan = T_cad_scan_best;
   std::vector<FeatureFit> fits;
@@ -607,7 +620,7 @@ DatumAlignmentResult align_from(const std::vector<Vec3>& scan,
       if (stage == "capture") {
         const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
                                                datum_detail::capture_radius(datums[k], band));
-        fits[k] = datum_detail::capture_feature(datums[k], near, band, settings);
+        fits[k] = datum_detail::capture_feature(datums[k], near, band, capture_settings);
       } else {
         const FeaturePoints near = near_points(candidates[k], out.T_cad_scan, datums[k],
                                                datum_detail::gather_radius(datums[k], band));

@@ -39,7 +39,7 @@ enum class Pins {
 
 struct ProductionCase {
   std::string name, file;
-  int root = 0;  // Flange::id of the datum flange
+  int root = 0;  // Flange::id of the datum flange; -1: the largest flange
   Pins pins = Pins::kHoleAndPin;
   long points = 400'000;  // over all passes: about 10 a mm^2 on the datum skin
   // The passes tilt about the flange's length (x of its frame), not across it: a narrow wall
@@ -54,12 +54,18 @@ struct ProductionCase {
 void PrintTo(const ProductionCase& c, std::ostream* os) { *os << c.name; }
 
 std::vector<ProductionCase> production_cases() {
-  return {{"SidePanel", "openamr-MMP.00.00.00.003_Side_panel.step", 0, Pins::kSlotAndEdges,
-           1'200'000, true, -Vec3::UnitZ(), -Vec3::UnitY()},
-          {"CoverFlange", "openamr-MMP.01.00.00.002_Cover_flange.step", 3, Pins::kHoleAndPin,
-           1'200'000},
-          {"Nema17Holes", "nema-17-bracket.step", 0, Pins::kHoleAndPin, 150'000},
-          {"Nema17Slots", "nema-17-bracket.step", 1, Pins::kSlots, 150'000}};
+  return {
+      {"SidePanel", "openamr-MMP.00.00.00.003_Side_panel.step", 0, Pins::kSlotAndEdges, 1'200'000,
+       true, -Vec3::UnitZ(), -Vec3::UnitY()},
+      {"CoverFlange", "openamr-MMP.01.00.00.002_Cover_flange.step", 3, Pins::kHoleAndPin,
+       1'200'000},
+      {"Nema17Holes", "nema-17-bracket.step", 0, Pins::kHoleAndPin, 150'000},
+      {"Nema17Slots", "nema-17-bracket.step", 1, Pins::kSlots, 150'000},
+      // The parts with round holes on their largest flange (datum_alignment_test.cpp: one
+      // view, sigma 0.02), here with the two views and noise levels.
+      {"MotorBracket", "openamr-MMP.03.00.00.003_Motor_bracket.step", -1, Pins::kHoleAndPin,
+       400'000},
+      {"FrontPanel", "openamr-MMP.00.00.00.001_Front_panel.step", -1, Pins::kHoleAndPin, 600'000}};
 }
 
 // The datum flange's seen skin: its samples, and its triangles in the flange's plane (u, v).
@@ -167,8 +173,8 @@ CaseDatums case_datums(const ProductionCase& c, const parts::CadPart& cad) {
   CaseDatums out;
   const auto root = std::find_if(  // the pads come largest first
       candidates.pads.begin(), candidates.pads.end(), [&](const PadCandidate& p) {
-        return c.root_normal.isZero() ? p.flange_id == c.root
-                                      : p.normal.dot(c.root_normal) > 0.9998;
+        if (!c.root_normal.isZero()) return p.normal.dot(c.root_normal) > 0.9998;
+        return c.root < 0 || p.flange_id == c.root;
       });
   EXPECT_NE(root, candidates.pads.end());
   if (root == candidates.pads.end()) return out;
