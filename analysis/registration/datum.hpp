@@ -32,9 +32,11 @@
 // A hole or slot is measured by what the scan shows: its wall, its rim on the seen skin, or both.
 // When a datum cannot be measured from the best fit, the whole alignment is tried from the best
 // fit turned half round about each of the part's principal axes (a near-symmetric part's best
-// fit may lie turned so); one from which every datum is measured is the result only when the
-// whole surface fits it better than the other half at the same pose (a part whose halves both
-// carry the datum features is not turned on its datums alone).
+// fit may lie turned so); one from which every datum is measured is the result when the scan
+// contradicts a datum at the other half at the same pose (a pad's skin facing away, skin inside a
+// hole's outline) and the surface does not favour that half, or when the whole surface fits it
+// better than the other half (a part whose halves both carry the datum features, or whose datum
+// is only out of the scan, is not turned on its datums alone).
 // A datum whose feature cannot be measured (not in the scan, on the skin it does not see) is
 // never a silent fallback to the best fit: the result says so (`achieved` false, the datum named
 // and why), its frame the best fit, and the caller fails the verdict.
