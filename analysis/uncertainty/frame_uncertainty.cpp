@@ -34,15 +34,40 @@ double largest_move(const Mat6& cov, const Vec3& c, const Vec3& lo, const Vec3& 
 }
 
 // The standard uncertainty of a value whose change is g . (rotation, translation): the
-// covariance's part, and the departure's: a move of about its size in a direction not known,
-// and a turn of that over the points' half-diagonal about an axis not known, each isotropic
-// (a third of its variance along each axis, as the frame's U takes d for the whole move).
+// covariance's part (the departed pairs' move of the frame included, departure_move), and the
+// departure as a move of about its size in a direction not known, isotropic (a third of its
+// variance along each axis, as the frame's U takes d for the whole move).
 double sensitivity_sigma(const FrameUncertainty& frame, const Vec6& g) {
-  const double turn = frame.departure_mm / frame.radius_mm;
-  const double departure2 = (frame.departure_mm * frame.departure_mm * g.tail<3>().squaredNorm() +
-                             turn * turn * g.head<3>().squaredNorm()) /
-                            3.0;
+  const double departure2 =
+      frame.departure_mm * frame.departure_mm * g.tail<3>().squaredNorm() / 3.0;
   return std::sqrt(std::max(0.0, g.dot(frame.covariance * g) + departure2));
+}
+
+// What the part's departure does to the frame (rotation about `c` in rad, translation in mm):
+// the fit's move were its most departed pairs (those beyond the `share` quantile of |r|, the
+// farthest 1 % left out as outliers) left out, (J^T J)^-1 sum j r over them, a one-step
+// least-squares update from the fit's own normal matrix of all its pairs. Directions the pairs
+// leave free (an extrusion's length) do not move.
+Vec6 departed_move(const std::vector<Vec6>& rows, const std::vector<double>& residuals,
+                   const Vec6& scale, double cut, double trim) {
+  Mat6 normal = Mat6::Zero();
+  Vec6 pull = Vec6::Zero();
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const double r = std::abs(residuals[i]);
+    if (r > trim) continue;
+    normal += rows[i] * rows[i].transpose();
+    if (r > cut) pull += rows[i] * residuals[i];
+  }
+  const Mat6 scaled =
+      scale.cwiseInverse().asDiagonal() * normal * scale.cwiseInverse().asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Mat6> eig(scaled);
+  const Vec6 b = scale.cwiseInverse().asDiagonal() * pull;
+  Vec6 x = Vec6::Zero();
+  const double largest = eig.eigenvalues()(5);
+  for (int k = 0; k < 6; ++k)
+    if (eig.eigenvalues()(k) > 1e-6 * largest)
+      x += eig.eigenvectors().col(k) * (eig.eigenvectors().col(k).dot(b) / eig.eigenvalues()(k));
+  return scale.cwiseInverse().asDiagonal() * x;
 }
 
 }  // namespace
@@ -142,8 +167,12 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   // % of the pairs, its sprung tip the farthest of them: the study's one-sided nema bracket
   // 1 mm off against U 0.14). Beyond the isotropic departure, along that direction (rotation
   // scaled by the radius: a turn of d / radius). Every direction so (not only the weak ones)
-  // padded the well-seen families' translation 3.5x (study, development seeds).
+  // padded the well-seen families' translation 3.5x (study, development seeds). Its translation
+  // only: on a flat panel its weak direction is the turn about the normal, which its walls'
+  // few pairs fix, and their residual there turned it by 0.13-0.15 deg where the frame was
+  // 0.002-0.007 off (the departed pairs' move below tells what they do to the rotation).
   constexpr double kWeakShare = 0.05;
+  Mat6 weak = Mat6::Zero();
   const double trim = magnitude[std::min(magnitude.size() - 1, magnitude.size() * 99 / 100)];
   for (int k = 0; k < 6; ++k) {
     if (!(eig.eigenvalues()(k) < kWeakShare * largest)) continue;
@@ -158,8 +187,27 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
     if (!(w_sum > 0.0)) continue;
     const double felt2 = wr2 / w_sum;
     if (felt2 <= sq(departure_mm)) continue;
-    cov += (felt2 - sq(departure_mm)) * v * v.transpose();
+    weak += (felt2 - sq(departure_mm)) * v * v.transpose();
   }
+  cov.bottomRightCorner<3, 3>() += weak.bottomRightCorner<3, 3>();
+  // What the departure does to the frame: the fit's move were its most departed pairs left
+  // out (the farthest 20, 10 or 5 %, whichever turns it most), as a standard uncertainty of
+  // 1.2x that along its own direction. The best fit of a sprung part turns with how the fit
+  // weighs and samples its departed surface (the reduced scan's points against the whole
+  // surface; the Huber corner and the pair distance), not with the departure's size over the
+  // part: the development seeds' sprung nema brackets turned 0.16-0.35 deg at 1.2-2.3x this
+  // move, the panels 0.002-0.04 deg where the departure over the half-diagonal said
+  // 0.07-0.18 (docs/uncertainty.md).
+  Vec6 departed = Vec6::Zero();
+  for (const double share : {0.80, 0.90, 0.95}) {
+    const double cut = magnitude[std::min(
+        magnitude.size() - 1,
+        static_cast<std::size_t>(share * static_cast<double>(magnitude.size())))];
+    const Vec6 move = departed_move(rows, residuals, scale, cut, trim);
+    if (move.head<3>().norm() > departed.head<3>().norm()) departed = move;
+  }
+  constexpr double kDepartedFactor = 1.2;
+  cov += sq(kDepartedFactor) * departed * departed.transpose();
   out.covariance = cov;
   out.center = c;
   out.departure_mm = departure_mm;
@@ -168,8 +216,7 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   const double k = st.coverage_factor;
   const double rotation_deg =
       std::sqrt(std::max(0.0, rot.eigenvalues()(2))) * 180.0 / std::numbers::pi;
-  const double departure_deg = departure_mm / radius * 180.0 / std::numbers::pi;
-  out.rotation_deg = k * std::sqrt(rotation_deg * rotation_deg + departure_deg * departure_deg +
+  out.rotation_deg = k * std::sqrt(rotation_deg * rotation_deg +
                                    st.calibration_angle_deg * st.calibration_angle_deg);
   const double thermal =
       st.expansion_per_k * std::abs(st.temperature_delta_k) * radius / std::sqrt(3.0);

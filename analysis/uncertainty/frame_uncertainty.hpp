@@ -23,8 +23,9 @@ struct FrameUncertainty {
   std::size_t pairs = 0;
   /// Standard, for propagating the frame to a value measured in it (frame_statistic_sigma):
   /// the covariance of (rotation about `center` in rad, translation in mm) from the pairs, the
-  /// free and weakly fixed directions at free_direction_mm; the part's departure from the CAD
-  /// (mm, a move in any direction, and over `radius_mm` a turn about any axis).
+  /// free and weakly fixed directions at free_direction_mm, and what the part's departure from
+  /// the CAD does to the fit (its most departed pairs' move, docs/uncertainty.md); the
+  /// departure itself (mm) as a move in any direction.
   Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Zero();
   Vec3 center = Vec3::Zero();
   double departure_mm = 0.0;

@@ -8,6 +8,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
+#include <numbers>
+
 #include "analysis/uncertainty/fit_covariance.hpp"
 #include "analysis/uncertainty/frame_uncertainty.hpp"
 #include "tests/analysis/uncertainty/coverage_study.hpp"
@@ -102,6 +106,82 @@ TEST(FrameStatistic, SigmaIsTheStatisticsMoveUnderTheFramesCovariance) {
   EXPECT_LT(frame_statistic_sigma(frame, points, d, 0.95, tree, normals), 0.01);
   // The frame's move at a point along a direction.
   EXPECT_NEAR(frame_point_sigma(frame, Vec3(3, 4, 5), Vec3::UnitX()), 0.05 / std::sqrt(3.0), 1e-9);
+}
+
+// An L bracket's model samples (1 mm apart): a base z = 0 over x in [0, 100], y in [0, 40]
+// (normals +z), and a wall x = 0 over z in (0, 60] (normals -x).
+void l_bracket(std::vector<Vec3>& samples, std::vector<Vec3>& normals) {
+  for (int y = 0; y <= 40; ++y) {
+    for (int x = 0; x <= 100; ++x)
+      samples.emplace_back(x, y, 0.0), normals.push_back(Vec3::UnitZ());
+    for (int z = 1; z <= 60; ++z)
+      samples.emplace_back(0.0, y, z), normals.push_back(-Vec3::UnitX());
+  }
+}
+
+// The turn (deg) of the point-to-plane least squares over `points` (paired with their model
+// sample by construction) between all pairs and all but those beyond the `share` quantile of
+// |r|: the test's own solve, with Eigen's LDLT.
+double least_squares_turn_deg(const std::vector<Vec3>& points, const std::vector<Vec3>& model,
+                              const std::vector<Vec3>& normals, double share) {
+  Vec3 c = Vec3::Zero();
+  for (const Vec3& p : points) c += p;
+  c /= static_cast<double>(points.size());
+  std::vector<double> r(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) r[i] = normals[i].dot(points[i] - model[i]);
+  std::vector<double> a(r.size());
+  for (std::size_t i = 0; i < r.size(); ++i) a[i] = std::abs(r[i]);
+  std::sort(a.begin(), a.end());
+  const double cut = a[static_cast<std::size_t>(share * static_cast<double>(a.size()))];
+  Eigen::Matrix<double, 6, 1> x[2];
+  for (int pass = 0; pass < 2; ++pass) {
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (pass == 1 && std::abs(r[i]) > cut) continue;
+      Eigen::Matrix<double, 6, 1> j;
+      j << (points[i] - c).cross(normals[i]), normals[i];
+      A += j * j.transpose();
+      b -= j * r[i];
+    }
+    x[pass] = A.ldlt().solve(b);
+  }
+  return (x[0] - x[1]).head<3>().norm() * 180.0 / std::numbers::pi;
+}
+
+// What the part's departure does to the result frame's rotation, not its size over the part:
+// a base bowed symmetrically about its middle (0.3 mm) does not turn the fit, and its rotation
+// U stays far below that departure as a turn over the half-diagonal; a wall sprung 1 deg about
+// the bend turns it, and U covers the turn its departed pairs give the least squares.
+TEST(FrameUncertainty, TheDepartureCountsByWhatItDoesToTheRotation) {
+  std::vector<Vec3> samples, normals;
+  l_bracket(samples, normals);
+  const KdTree tree(samples);
+  std::vector<Vec3> bowed(samples), sprung(samples);
+  const double spring = 1.0 * std::numbers::pi / 180.0;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const Vec3& p = samples[i];
+    if (normals[i].z() > 0.5)  // the base: a bow even about x = 50
+      bowed[i].z() += 0.3 * std::cos(2.0 * std::numbers::pi * (p.x() - 50.0) / 100.0);
+    else  // the wall turned about the bend line (the y axis), its top outward
+      sprung[i] = Vec3(-std::sin(spring) * p.z(), p.y(), std::cos(spring) * p.z());
+  }
+  UncertaintySettings st;
+  st.scanner_sigma_mm = 0.02;
+  const FrameUncertainty bow = frame_uncertainty(bowed, tree, normals, st);
+  ASSERT_GE(bow.pairs, 6u);
+  const double half_diagonal = 0.5 * Vec3(100.0, 40.0, 60.0).norm();
+  const double old_turn_deg = 2.0 * bow.departure_mm / half_diagonal * 180.0 / std::numbers::pi;
+  EXPECT_GT(old_turn_deg, 0.2);
+  EXPECT_LT(bow.rotation_deg, 0.25 * old_turn_deg);
+  const FrameUncertainty sb = frame_uncertainty(sprung, tree, normals, st);
+  ASSERT_GE(sb.pairs, 6u);
+  double turn = 0.0;
+  for (const double share : {0.8, 0.9, 0.95})
+    turn = std::max(turn, least_squares_turn_deg(sprung, samples, normals, share));
+  EXPECT_GT(turn, 0.01);
+  EXPECT_GE(sb.rotation_deg, 2.0 * turn);
+  EXPECT_LE(sb.rotation_deg, 3.0 * 2.4 * turn) << "padded";
 }
 
 // The distances' own noise from consecutive neighbours (a scanner's line order), on a surface
