@@ -337,8 +337,8 @@ SkinNormals skin_normals(const PointCloud& scan, const PartModel& model,
 // viewpoint within 60 deg are known, the others (the standing walls) left out. The exact updates
 // before the orientation is settled and the rivals' comparison keep it: with the walls in, a
 // points-only sprung side panel's few notch points no longer decided its half turn
-// (production_parts_test.cpp FewNotchPointsDecideUnderNoise); the walls join the last least
-// squares only (least_squares_best_fit).
+// (production_parts_test.cpp FewNotchPointsDecideUnderNoise, again with the flat seeds first);
+// the walls join the last least squares only (least_squares_best_fit).
 SkinNormals viewpoint_facing(const SkinNormals& skins, const PointCloud& fit_points,
                              const std::vector<Vec3>& fit_normals, const Vec3& viewpoint) {
   if (skins.normals.empty()) return {};
@@ -359,16 +359,43 @@ SkinNormals viewpoint_facing(const SkinNormals& skins, const PointCloud& fit_poi
 // which the viewpoint decides by a small vertical part, is a guess until it is grown along the
 // skin from a flange that faces the scanner (issue 32: with the walls left out, the frame sat on
 // the flanges, 0.33 mm off on a perfect front panel). Such points are left out of the updates.
-FacingSample exact_update_points(const PointCloud& scan, const PointCloud& fit_points,
-                                 const SkinNormals& skins, std::size_t count) {
-  if (skins.normals.empty()) return facing_sample(scan.points, normals_of(scan), count);
-  const KdTree fit_tree(fit_points.points);
+// The sample and each point's nearest fit point are found once (one k-d tree) for both rules
+// the pipeline signs by (`skins` and `facing`, run_inspection).
+struct ExactUpdatePoints {
+  FacingSample skins, facing;
+};
+
+FacingSample with_known_signs(const std::vector<Vec3>& sample,
+                              const std::vector<std::uint32_t>& nearest_fit,
+                              const SkinNormals& signs) {
   FacingSample out;
-  for (const Vec3& p : strided_sample(scan.points, count))
-    if (const auto nn = fit_tree.nearest(p); nn && skins.known[nn->index]) {
-      out.points.push_back(p);
-      out.normals.push_back(skins.normals[nn->index]);
+  for (std::size_t k = 0; k < sample.size(); ++k)
+    if (signs.known[nearest_fit[k]]) {
+      out.points.push_back(sample[k]);
+      out.normals.push_back(signs.normals[nearest_fit[k]]);
     }
+  return out;
+}
+
+ExactUpdatePoints exact_update_points(const PointCloud& scan, const PointCloud& fit_points,
+                                      const SkinNormals& skins, const SkinNormals& facing,
+                                      std::size_t count) {
+  ExactUpdatePoints out;
+  if (skins.normals.empty()) {
+    out.skins = facing_sample(scan.points, normals_of(scan), count);
+    out.facing = out.skins;
+    return out;
+  }
+  const KdTree fit_tree(fit_points.points);
+  std::vector<Vec3> sample;
+  std::vector<std::uint32_t> nearest_fit;
+  for (const Vec3& p : strided_sample(scan.points, count))
+    if (const auto nn = fit_tree.nearest(p)) {
+      sample.push_back(p);
+      nearest_fit.push_back(nn->index);
+    }
+  out.skins = with_known_signs(sample, nearest_fit, skins);
+  out.facing = with_known_signs(sample, nearest_fit, facing);
   return out;
 }
 
@@ -559,14 +586,12 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
       skin_normals(scan, model, reduced->scan_for_fit, *fit_normals, config->normals.viewpoint);
   const SkinNormals facing =
       viewpoint_facing(skins, reduced->scan_for_fit, *fit_normals, config->normals.viewpoint);
-  const FacingSample exact_points =
-      exact_updates
-          ? exact_update_points(scan, reduced->scan_for_fit, skins, config->global_fit.exact_points)
-          : FacingSample{};
-  const FacingSample settle_points = exact_updates && !skins.normals.empty()
-                                         ? exact_update_points(scan, reduced->scan_for_fit, facing,
-                                                               config->global_fit.exact_points)
-                                         : exact_points;
+  const ExactUpdatePoints exact = exact_updates
+                                      ? exact_update_points(scan, reduced->scan_for_fit, skins,
+                                                            facing, config->global_fit.exact_points)
+                                      : ExactUpdatePoints{};
+  const FacingSample& exact_points = exact.skins;
+  const FacingSample& settle_points = exact.facing;
   if (auto error = finish_best_fit(settle_points.points, settle_points.normals, exact_updates,
                                    model_tree, model.samples.normals, config->global_fit,
                                    config->global_fit.exact_iterations,

@@ -75,6 +75,12 @@ constexpr std::size_t kSkinNeighbours = 10;
 // point on a bend's outer skin turned a whole wall (a perfect Z profile 1.2 mm off).
 constexpr double kMinFacingViewpoint = 0.70710678118654752;  // cos 45 deg
 constexpr double kMinParallel = 0.5;                         // a step between normals within 60 deg
+// A seed that grows first lies on a flat patch of one skin: every one of its neighbours' normals
+// within 30 deg of its own. Where a wall is seen on both skins by sparse grazing lines, a point's
+// neighbours span the sheet and its plane may be one across it, whose normal lies in the wall and
+// may face the viewpoint: such seeds signed a points-only Z profile's walls at random (1,325 of
+// 9,514 fit points wrong, its frame 1.40 mm off; 5 wrong and 0.08 mm with this rule).
+constexpr double kMinFlatSeed = 0.86602540378443865;  // cos 30 deg
 
 // A step of the growth: to point `to` from an oriented point, at cost 1 - |n_from . n_to|.
 struct SkinStep {
@@ -110,23 +116,42 @@ SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vecto
       steps.push({1.0 - parallel, i, q});
     }
   };
+  const auto neighbours_within = [&](std::size_t i, double min_dot) {
+    const std::size_t found = tree.knn(points[i], kSkinNeighbours, nn.data(), d2.data());
+    for (std::size_t j = 0; j < found; ++j)
+      if (std::abs(normals[nn[j]].dot(normals[i])) < min_dot) return false;
+    return true;
+  };
+  // Prim's order from every seed at once: each point takes its sign over the most parallel step
+  // that reaches it first.
+  const auto grow = [&] {
+    while (!steps.empty()) {
+      const SkinStep s = steps.top();
+      steps.pop();
+      if (out.known[s.to]) continue;
+      Vec3& m = out.normals[s.to];
+      if (out.normals[s.from].dot(m) < 0.0) m = -m;
+      out.known[s.to] = 1;
+      push_neighbours(s.to);
+    }
+  };
+  std::vector<std::uint32_t> facing;
   for (std::size_t i = 0; i < points.size(); ++i) {
     const Vec3& n = normals[i];
     if (n.isZero() || n.dot((viewpoint - points[i]).normalized()) < kMinFacingViewpoint) continue;
-    out.known[i] = 1;
+    facing.push_back(static_cast<std::uint32_t>(i));
   }
-  for (std::size_t i = 0; i < points.size(); ++i)
-    if (out.known[i]) push_neighbours(static_cast<std::uint32_t>(i));
-  // Prim's order from every seed at once: each point takes its sign over the most parallel step
-  // that reaches it first.
-  while (!steps.empty()) {
-    const SkinStep s = steps.top();
-    steps.pop();
-    if (out.known[s.to]) continue;
-    Vec3& m = out.normals[s.to];
-    if (out.normals[s.from].dot(m) < 0.0) m = -m;
-    out.known[s.to] = 1;
-    push_neighbours(s.to);
+  // The seeds on flat patches grow first. Then the facing points they did not reach whose
+  // neighbours' normals lie within 60 deg seed what is left: without them a wall skin that no flat
+  // seed's growth reached stayed unknown and out of the last least squares (a points-only Z
+  // profile 0.019 -> 0.074 mm). A point whose neighbours' normals spread wider seeds nothing.
+  for (const double min_dot : {kMinFlatSeed, kMinParallel}) {
+    for (const std::uint32_t i : facing) {
+      if (out.known[i] || !neighbours_within(i, min_dot)) continue;
+      out.known[i] = 1;
+      push_neighbours(i);
+    }
+    grow();
   }
   return out;
 }

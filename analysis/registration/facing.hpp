@@ -76,7 +76,9 @@ struct SkinNormals {
 
 /// Signs estimated `normals` (of `points`, a one-sided scan of a solid) along each skin: a normal
 /// facing `viewpoint` within 45 deg keeps its sign (no pass tilted less than 45 deg from the
-/// viewpoint's direction sees a skin that faces away from it by 135 deg), and the others get theirs
+/// viewpoint's direction sees a skin that faces away from it by 135 deg), those on a flat patch
+/// first (every neighbour's normal within 30 deg: a plane estimated across a sheet seen on both
+/// skins has a normal within the wall that may face the viewpoint), and the others get theirs
 /// by growing each skin from those, over the k nearest points, the most parallel neighbour first
 /// (Hoppe et al. 1992: the consistent orientation of a minimum spanning tree; Open3D's
 /// orient_normals_consistent_tangent_plane). A standing wall's estimated normal is horizontal, and
