@@ -83,9 +83,14 @@ parts::ProfileSpec random_profile(std::mt19937_64& rng) {
 std::string describe(const parts::ProfileSpec& spec) {
   std::string out = spec.thickness_mm > 0 ? "solid profile" : "profile";
   char buf[64];
+  // The first flange's length, then each turn and the flange after it (the first was printed
+  // as 0 before issue 32's round of 2026-12-07).
   for (std::size_t k = 0; k < spec.flange_lengths_mm.size(); ++k) {
-    std::snprintf(buf, sizeof buf, k ? " %+.0f/%.0f" : " %.0f",
-                  k ? spec.bend_angles_deg[k - 1] : 0.0, spec.flange_lengths_mm[k]);
+    if (k == 0)
+      std::snprintf(buf, sizeof buf, " %.0f", spec.flange_lengths_mm[0]);
+    else
+      std::snprintf(buf, sizeof buf, " %+.0f/%.0f", spec.bend_angles_deg[k - 1],
+                    spec.flange_lengths_mm[k]);
     out += buf;
   }
   return out;
