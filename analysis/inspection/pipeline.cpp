@@ -350,21 +350,12 @@ SkinNormals viewpoint_facing(const SkinNormals& skins, const PointCloud& fit_poi
   return out;
 }
 
-// The scan points the exact-surface updates pair (global_fit.hpp, finish_best_fit): an
-// evenly strided sample of `count`, with the scan's normals when it has them. A points-only
-// scan of a solid lends a point the normal of its nearest fit point, so that the facing rule
-// holds: without it a point near a closed hem (four skins within 1.8 mm) paired across the
-// sheet, and the cover flange's points-only field went 0.3 -> 1.2 mm. Only where the scan tells
-// that normal's sign (`skins`): a standing wall's estimated normal is horizontal, and its sign,
-// which the viewpoint decides by a small vertical part, is a guess until it is grown along the
-// skin from a flange that faces the scanner (issue 32: with the walls left out, the frame sat on
-// the flanges, 0.33 mm off on a perfect front panel). Such points are left out of the updates.
-// The sample and each point's nearest fit point are found once (one k-d tree) for both rules
-// the pipeline signs by (`skins` and `facing`, run_inspection).
+// The exact updates' points under each sign rule (exact_update_points).
 struct ExactUpdatePoints {
   FacingSample skins, facing;
 };
 
+// The sampled points whose nearest fit point's sign `signs` tells, each with that normal.
 FacingSample with_known_signs(const std::vector<Vec3>& sample,
                               const std::vector<std::uint32_t>& nearest_fit,
                               const SkinNormals& signs) {
@@ -377,6 +368,17 @@ FacingSample with_known_signs(const std::vector<Vec3>& sample,
   return out;
 }
 
+// The scan points the exact-surface updates pair (global_fit.hpp, finish_best_fit): an
+// evenly strided sample of `count`, with the scan's normals when it has them. A points-only
+// scan of a solid lends a point the normal of its nearest fit point, so that the facing rule
+// holds: without it a point near a closed hem (four skins within 1.8 mm) paired across the
+// sheet, and the cover flange's points-only field went 0.3 -> 1.2 mm. Only where the scan tells
+// that normal's sign (`skins`): a standing wall's estimated normal is horizontal, and its sign,
+// which the viewpoint decides by a small vertical part, is a guess until it is grown along the
+// skin from a flange that faces the scanner (issue 32: with the walls left out, the frame sat on
+// the flanges, 0.33 mm off on a perfect front panel). Such points are left out of the updates.
+// The sample and each point's nearest fit point are found once (one k-d tree) for both rules
+// the pipeline signs by (`skins` and `facing`, run_inspection).
 ExactUpdatePoints exact_update_points(const PointCloud& scan, const PointCloud& fit_points,
                                       const SkinNormals& skins, const SkinNormals& facing,
                                       std::size_t count) {

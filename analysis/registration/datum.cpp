@@ -34,6 +34,11 @@ constexpr double kParallelDot = 0.999;  // a flange's normal this close to the d
 constexpr std::size_t kCapturePoints = 200'000;
 constexpr std::size_t kMinCapturePoints = 6;  // a feature's points in the strided capture
 
+// Every how many scan points the capture rounds read one (at most kCapturePoints in all).
+std::size_t capture_stride(std::size_t scan_points) {
+  return std::max<std::size_t>(1, (scan_points + kCapturePoints - 1) / kCapturePoints);
+}
+
 std::optional<Error> bad(std::string_view context, const Datum& d, const std::string& what) {
   return fail(ErrorCode::kInvalidSettings,
               std::string(context) + "datum '" + d.name + "' (" + to_string(d.kind) + "): " + what);
@@ -474,8 +479,7 @@ std::string contradicted_datums(const std::vector<Vec3>& scan, const std::vector
   const double capture = std::max(settings.capture_mm, settings.search_mm);
   std::vector<double> reach;
   for (const Datum& d : datums) reach.push_back(datum_detail::capture_radius(d, capture) + capture);
-  const std::size_t stride =
-      std::max<std::size_t>(1, (scan.size() + kCapturePoints - 1) / kCapturePoints);
+  const std::size_t stride = capture_stride(scan.size());
   const std::vector<FeaturePoints> near =
       within_reach(scan, normals, T, datums, reach, settings.threads, stride);
   std::string names;
@@ -602,8 +606,7 @@ DatumAlignmentResult align_from(const std::vector<Vec3>& scan,
                             settings.capture_mm);
     reach.push_back(datum_detail::gather_radius(d, settings.search_mm) + settings.search_mm);
   }
-  const std::size_t stride =
-      std::max<std::size_t>(1, (scan.size() + kCapturePoints - 1) / kCapturePoints);
+  const std::size_t stride = capture_stride(scan.size());
   std::vector<FeaturePoints> candidates;
   if (capture)
     candidates = within_reach(scan, scan_normals, T_cad_scan_best, datums, capture_reach,
