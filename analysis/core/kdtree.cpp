@@ -137,6 +137,123 @@ class KnnAlong {
   const Vec3& direction_;
 };
 
+// nanoflann's tree copied for the nearest search, the hot query of every stage (ICP pairs,
+// boundary contacts, flange assignment: a third of the analysis's CPU, docs/performance.md):
+// nodes in one array in depth-first order (a node's first child follows it) and each leaf's
+// points in one contiguous run, where nanoflann reads them through its index array. The search
+// is nanoflann's searchLevel step for step (the same children in the same order, the same
+// pruning test, the same sums in the same order: no FMA contraction at -std=c++20), so it
+// finds the same point, equal distances included (the first one visited).
+class FlatTree {
+ public:
+  FlatTree(const Index& index, const std::vector<Vec3>& points) {
+    if (index.root_node == nullptr) return;
+    for (int i = 0; i < 3; ++i) {
+      low_[i] = index.root_bbox[i].low;
+      high_[i] = index.root_bbox[i].high;
+    }
+    leaf_points_.reserve(points.size());
+    leaf_index_.reserve(points.size());
+    copy(index, index.root_node, points);
+  }
+
+  // nanoflann's findNeighbors with eps 0: `result` (a nanoflann result set) is offered the
+  // same points in the same order.
+  template <typename ResultSet>
+  void find(ResultSet& result, const Vec3& query) const {
+    if (nodes_.empty()) return;
+    std::array<double, 3> dists{0.0, 0.0, 0.0};
+    double distsq = 0.0;
+    for (int i = 0; i < 3; ++i) {  // nanoflann's computeInitialDistances
+      if (query[i] < low_[i]) {
+        dists[i] = (query[i] - low_[i]) * (query[i] - low_[i]);
+        distsq += dists[i];
+      }
+      if (query[i] > high_[i]) {
+        dists[i] = (query[i] - high_[i]) * (query[i] - high_[i]);
+        distsq += dists[i];
+      }
+    }
+    search(result, 0, query.data(), distsq, dists);
+  }
+
+ private:
+  struct Node {
+    double low = 0.0, high = 0.0;  // inner: the split's divlow and divhigh
+    std::uint32_t begin = 0;       // leaf: its points' run; inner: unused (child1 is next)
+    std::uint32_t end = 0;         // leaf: end of the run; inner: the second child
+    int axis = -1;                 // inner: the split's axis; leaf: -1
+  };
+  template <typename NodePtr>
+  std::uint32_t copy(const Index& index, NodePtr node, const std::vector<Vec3>& points) {
+    const auto at = static_cast<std::uint32_t>(nodes_.size());
+    nodes_.emplace_back();
+    if (node->child1 == nullptr && node->child2 == nullptr) {
+      nodes_[at].begin = static_cast<std::uint32_t>(leaf_points_.size());
+      for (auto i = node->node_type.lr.left; i < node->node_type.lr.right; ++i) {
+        leaf_points_.push_back(points[index.vAcc[i]]);
+        leaf_index_.push_back(index.vAcc[i]);
+      }
+      nodes_[at].end = static_cast<std::uint32_t>(leaf_points_.size());
+      return at;
+    }
+    nodes_[at].axis = static_cast<int>(node->node_type.sub.divfeat);
+    nodes_[at].low = node->node_type.sub.divlow;
+    nodes_[at].high = node->node_type.sub.divhigh;
+    copy(index, node->child1, points);
+    const std::uint32_t second = copy(index, node->child2, points);
+    nodes_[at].end = second;
+    return at;
+  }
+
+  // nanoflann's searchLevel with eps 0 (mindistsq * 1.0f is exact); false when the result set
+  // wants no more points.
+  template <typename ResultSet>
+  bool search(ResultSet& result, std::uint32_t at, const double* q, double mindistsq,
+              std::array<double, 3>& dists) const {
+    const Node& node = nodes_[at];
+    if (node.axis < 0) {
+      const double worst = result.worstDist();
+      for (std::uint32_t k = node.begin; k < node.end; ++k) {
+        const double* p = leaf_points_[k].data();
+        const double dx = q[0] - p[0], dy = q[1] - p[1], dz = q[2] - p[2];
+        double d = dx * dx;  // L2_Simple_Adaptor::evalMetric's sum, in its order
+        d += dy * dy;
+        d += dz * dz;
+        if (d < worst && !result.addPoint(d, leaf_index_[k])) return false;
+      }
+      return true;
+    }
+    const int axis = node.axis;
+    const double val = q[axis];
+    const double diff1 = val - node.low, diff2 = val - node.high;
+    std::uint32_t near_child, far_child;
+    double cut_dist;
+    if ((diff1 + diff2) < 0) {
+      near_child = at + 1;
+      far_child = node.end;
+      cut_dist = (val - node.high) * (val - node.high);
+    } else {
+      near_child = node.end;
+      far_child = at + 1;
+      cut_dist = (val - node.low) * (val - node.low);
+    }
+    if (!search(result, near_child, q, mindistsq, dists)) return false;
+    const double dst = dists[axis];
+    mindistsq = mindistsq + cut_dist - dst;
+    dists[axis] = cut_dist;
+    if (mindistsq <= result.worstDist() && !search(result, far_child, q, mindistsq, dists))
+      return false;
+    dists[axis] = dst;
+    return true;
+  }
+
+  std::vector<Node> nodes_;
+  std::vector<Vec3> leaf_points_;
+  std::vector<std::uint32_t> leaf_index_;
+  double low_[3] = {0.0, 0.0, 0.0}, high_[3] = {0.0, 0.0, 0.0};
+};
+
 }  // namespace
 
 struct KdTree::Impl {
@@ -145,10 +262,12 @@ struct KdTree::Impl {
         adaptor{&points},
         index(3, adaptor,
               nanoflann::KDTreeSingleIndexAdaptorParams(
-                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))) {}
+                  static_cast<std::size_t>(settings.leaf_size > 0 ? settings.leaf_size : 16))),
+        flat(index, points) {}
   std::vector<Vec3> points;
   PointsAdaptor adaptor;
   Index index;
+  FlatTree flat;
 };
 
 KdTree::KdTree(std::vector<Vec3> points, const KdTreeSettings& settings)
@@ -166,7 +285,7 @@ std::optional<Neighbor> KdTree::nearest(const Vec3& query, double max_distance) 
                            ? std::numeric_limits<double>::infinity()
                            : max_distance * max_distance;
   NearestWithin result(bound);
-  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->flat.find(result, query);
   if (!result.found()) return std::nullopt;
   return result.neighbor();
 }
@@ -176,7 +295,7 @@ std::size_t KdTree::knn(const Vec3& query, std::size_t k, std::uint32_t* indices
   if (empty() || k == 0) return 0;
   nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> result(k);
   result.init(indices, squared_distances);
-  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->flat.find(result, query);
   return result.size();
 }
 
@@ -209,7 +328,7 @@ std::optional<Neighbor> KdTree::nearest_along(const Vec3& query, const std::vect
                            ? std::numeric_limits<double>::infinity()
                            : max_distance * max_distance;
   NearestAlong result(bound, normals, direction, max_rank, min_dot);
-  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->flat.find(result, query);
   if (!result.found()) return std::nullopt;
   return result.neighbor();
 }
@@ -219,7 +338,7 @@ std::size_t KdTree::knn_along(const Vec3& query, const std::vector<Vec3>& normal
                               double* squared_distances) const {
   if (empty() || k == 0 || normals.size() != size()) return 0;
   KnnAlong result(k, indices, squared_distances, normals, direction);
-  impl_->index.findNeighbors(result, query.data(), nanoflann::SearchParams());
+  impl_->flat.find(result, query);
   return result.size();
 }
 

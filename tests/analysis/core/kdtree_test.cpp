@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <nanoflann.hpp>
 #include <numbers>
 #include <random>
 #include <thread>
@@ -190,6 +191,66 @@ TEST(KdTree, ConcurrentQueriesAgreeWithSerial) {
   }
   for (auto& thread : threads) thread.join();
   EXPECT_EQ(serial, parallel);
+}
+
+// KdTree searches its own copy of nanoflann's tree (kdtree.cpp, FlatTree) and must answer as
+// nanoflann's own search does, to the index: among points at the same distance the one it visits
+// first. A lattice with every point twice (ties everywhere), queried from lattice points and
+// half steps, against a nanoflann index over the same points with the same leaf size.
+struct LatticeAdaptor {
+  const std::vector<Vec3>* points;
+  std::size_t kdtree_get_point_count() const { return points->size(); }
+  double kdtree_get_pt(std::size_t i, std::size_t dim) const { return (*points)[i][dim]; }
+  template <class Box>
+  bool kdtree_get_bbox(Box&) const {
+    return false;
+  }
+};
+
+TEST(KdTree, SameAnswersAsNanoflannTiesIncluded) {
+  std::vector<Vec3> points;
+  for (int x = 0; x < 12; ++x)
+    for (int y = 0; y < 10; ++y)
+      for (int z = 0; z < 6; ++z)
+        for (int copy = 0; copy < 2; ++copy) points.emplace_back(x, 0.5 * y, 2.0 * z);
+  std::mt19937 rng(37);
+  std::shuffle(points.begin(), points.end(), rng);
+  const KdTree tree(points);
+  const LatticeAdaptor adaptor{&points};
+  using Index = nanoflann::KDTreeSingleIndexAdaptor<
+      nanoflann::L2_Simple_Adaptor<double, LatticeAdaptor, double, std::uint32_t>, LatticeAdaptor,
+      3, std::uint32_t>;
+  const Index index(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+  std::uniform_int_distribution<int> step(-4, 28);
+  std::vector<Neighbor> got;
+  for (int n = 0; n < 600; ++n) {
+    const double x = 0.5 * step(rng), y = 0.25 * step(rng), z = 0.5 * step(rng);
+    const Vec3 q(x, y, z);
+    constexpr std::size_t k = 9;
+    std::uint32_t expected_index[k];
+    double expected_d2[k];
+    nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> expected(k);
+    expected.init(expected_index, expected_d2);
+    index.findNeighbors(expected, q.data(), nanoflann::SearchParams());
+    tree.knn(q, k, got);
+    ASSERT_EQ(got.size(), k);
+    for (std::size_t i = 0; i < k; ++i) {
+      EXPECT_EQ(got[i].index, expected_index[i]) << "query " << q.transpose() << ", rank " << i;
+      EXPECT_EQ(got[i].squared_distance, expected_d2[i]);
+    }
+    // The nearest is nanoflann's first: with k = 1 it keeps the first of equal distances too.
+    nanoflann::KNNResultSet<double, std::uint32_t, std::size_t> first(1);
+    first.init(expected_index, expected_d2);
+    index.findNeighbors(first, q.data(), nanoflann::SearchParams());
+    const auto nearest = tree.nearest(q);
+    ASSERT_TRUE(nearest.has_value());
+    EXPECT_EQ(nearest->index, expected_index[0]) << "query " << q.transpose();
+    EXPECT_EQ(nearest->squared_distance, expected_d2[0]);
+    // A bound above the nearest distance prunes the search but keeps its answer.
+    const auto bounded = tree.nearest(q, std::sqrt(expected_d2[0]) + 0.3);
+    ASSERT_TRUE(bounded.has_value());
+    EXPECT_EQ(bounded->index, expected_index[0]);
+  }
 }
 
 TEST(KdTree, SurvivesMove) {
