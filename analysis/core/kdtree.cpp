@@ -315,7 +315,10 @@ void KdTree::radius(const Vec3& query, double radius, std::vector<Neighbor>& out
   std::vector<std::pair<std::uint32_t, double>> found;
   // nanoflann's radius search is strict (d < r); widen by one ulp so that r is inclusive.
   const double r2 = std::nextafter(radius * radius, std::numeric_limits<double>::infinity());
-  impl_->index.radiusSearch(query.data(), r2, found, nanoflann::SearchParams(32, 0.0f, true));
+  // nanoflann's radiusSearch, sorted: the same result set and the same sort of what it found.
+  nanoflann::RadiusResultSet<double, std::uint32_t> result(r2, found);
+  impl_->flat.find(result, query);
+  std::sort(found.begin(), found.end(), nanoflann::IndexDist_Sorter());
   out.reserve(found.size());
   for (const auto& [index, d2] : found) out.push_back({index, d2});
 }

@@ -58,6 +58,9 @@ TriangleBvh::TriangleBvh(const std::vector<Vec3>& vertices,
   nodes_.reserve(2 * corners_.size() + 1);
   nodes_.emplace_back();
   build(0, 0, static_cast<std::uint32_t>(corners_.size()), std::clamp(settings.leaf_size, 1, 64));
+  boxes_.reserve(corners_.size());
+  for (const auto& t : corners_)
+    boxes_.push_back({t[0].cwiseMin(t[1]).cwiseMin(t[2]), t[0].cwiseMax(t[1]).cwiseMax(t[2])});
   leaf_of_.resize(corners_.size());
   for (std::uint32_t n = 0; n < nodes_.size(); ++n)
     for (std::uint32_t i = 0; i < nodes_[n].count; ++i) leaf_of_[nodes_[n].first + i] = n;

@@ -77,8 +77,12 @@ class TriangleBvh {
     std::uint32_t count = 0;   ///< leaf: triangle count; 0 for inner nodes
     std::uint32_t parent = 0;  ///< the root's is 0, itself
   };
-  static double box_squared_distance(const Node& node, const Vec3& p) {
-    return (p.cwiseMax(node.lo).cwiseMin(node.hi) - p).squaredNorm();
+  struct Box {
+    Vec3 lo, hi;
+  };
+  template <typename Boxed>
+  static double box_squared_distance(const Boxed& box, const Vec3& p) {
+    return (p.cwiseMax(box.lo).cwiseMin(box.hi) - p).squaredNorm();
   }
   void build(std::uint32_t node, std::uint32_t first, std::uint32_t count, int leaf_size);
   // near()'s search in the subtree of `root`, within `best` (lowered and returned).
@@ -89,6 +93,7 @@ class TriangleBvh {
   std::vector<Node> nodes_;
   std::vector<std::uint32_t> leaf_of_;        ///< slot (leaf order) -> its leaf node
   std::vector<std::array<Vec3, 3>> corners_;  ///< triangles in leaf order
+  std::vector<Box> boxes_;                    ///< their bounding boxes, in leaf order
   std::vector<std::uint32_t> original_;       ///< leaf order -> index given at construction
 };
 
@@ -123,6 +128,9 @@ double TriangleBvh::search(std::uint32_t root, const Vec3& query, double slack_m
     if (box_squared_distance(node, query) > bound2()) continue;
     if (node.count > 0) {
       for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
+        // The triangle's own box first, as the nodes' (the closest point of the triangle lies
+        // in it): in a leaf the query reaches, most triangles lie beyond the bound.
+        if (box_squared_distance(boxes_[i], query) > bound2()) continue;
         const auto& t = corners_[i];
         TriangleFoot foot = closest_on_triangle(query, t[0], t[1], t[2]);
         const double d = std::sqrt(foot.squared_distance);

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <nanoflann.hpp>
 #include <numbers>
 #include <random>
@@ -246,6 +247,18 @@ TEST(KdTree, SameAnswersAsNanoflannTiesIncluded) {
     ASSERT_TRUE(nearest.has_value());
     EXPECT_EQ(nearest->index, expected_index[0]) << "query " << q.transpose();
     EXPECT_EQ(nearest->squared_distance, expected_d2[0]);
+    // Within a radius, in nanoflann's order (its sort of the same points found in the same
+    // order: equal distances included).
+    const double r = 0.75 + 0.25 * static_cast<double>(n % 5);
+    std::vector<std::pair<std::uint32_t, double>> in_radius;
+    index.radiusSearch(q.data(), std::nextafter(r * r, 1e300), in_radius,
+                       nanoflann::SearchParams(32, 0.0f, true));
+    tree.radius(q, r, got);
+    ASSERT_EQ(got.size(), in_radius.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].index, in_radius[i].first) << "query " << q.transpose() << ", " << i;
+      EXPECT_EQ(got[i].squared_distance, in_radius[i].second);
+    }
     // A bound above the nearest distance prunes the search but keeps its answer.
     const auto bounded = tree.nearest(q, std::sqrt(expected_d2[0]) + 0.3);
     ASSERT_TRUE(bounded.has_value());

@@ -95,5 +95,36 @@ TEST(TriangleBvh, NearFromAnyStartFindsWhatNearFinds) {
   }
 }
 
+// Every triangle within the slack of the nearest is reported, as brute force finds them: the
+// triangles' own boxes, tested before their closest points, drop none of them (slack 0, the
+// nearest alone, included).
+TEST(TriangleBvh, NearReportsEveryTriangleWithinTheSlack) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  const Soup soup = random_triangles(rng, 400, Vec3(1, 1, 0.3), Vec3(0.4, 0.4, 0.04));
+  const TriangleBvh bvh(soup.v, soup.t, {.leaf_size = 8});
+  for (const double slack : {0.0, 0.05, 0.5}) {
+    for (int q = 0; q < 300; ++q) {
+      const Vec3 p = testing::draw_vec3(u, rng);
+      std::vector<double> d(soup.t.size());
+      double nearest = 1e300;
+      for (std::size_t i = 0; i < soup.t.size(); ++i) {
+        const auto& tri = soup.t[i];
+        d[i] = std::sqrt(closest_on_triangle(p, soup.v[tri[0]], soup.v[tri[1]], soup.v[tri[2]])
+                             .squared_distance);
+        nearest = std::min(nearest, d[i]);
+      }
+      std::set<std::uint32_t> expected, found;
+      for (std::uint32_t i = 0; i < d.size(); ++i)
+        if (d[i] <= nearest + slack) expected.insert(i);
+      const double got = bvh.near(p, slack, [&](const TriangleFoot& f) {
+        if (std::sqrt(f.squared_distance) <= nearest + slack) found.insert(f.triangle);
+      });
+      EXPECT_EQ(got, nearest);
+      EXPECT_EQ(found, expected) << "query " << q << ", slack " << slack;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace springscan::analysis
