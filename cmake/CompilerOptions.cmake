@@ -16,6 +16,20 @@ if(SPRINGSCAN_SANITIZE)
   add_link_options(${SPRINGSCAN_SANITIZER_FLAGS})
 endif()
 
+# springscan_inline_eigen(TARGET): under ASan + UBSan, Eigen's small functions (coefficient
+# access, expression evaluators) inlined by force in TARGET. clang inserts UBSan's checks before
+# it inlines, and with them each of those functions exceeds the inliner's threshold and stays a
+# call: the analysis then runs several times slower than it needs to (docs/performance.md,
+# "CI's own time"). always_inline keeps every check, inlined. Set on the computing libraries
+# only, where the sanitizer suite spends its time: it costs compile time, which the test
+# programs' glue would not pay back. No-op in the other builds.
+function(springscan_inline_eigen target)
+  if(SPRINGSCAN_SANITIZE)
+    target_compile_definitions(${target} PRIVATE
+                               "EIGEN_STRONG_INLINE=__attribute__((always_inline)) inline")
+  endif()
+endfunction()
+
 # The libFuzzer targets of tests/fuzz (clang) live in the ASan + UBSan build beside the tests
 # (scripts/build.sh sanitize), so CI compiles the project under ASan once, not twice. Coverage
 # instrumentation (fuzzer-no-link) goes only on the code that parses untrusted bytes, through
