@@ -321,16 +321,18 @@ const std::vector<Vec3>& normals_of(const PointCloud& scan) {
 }
 
 // The fit points' estimated normals with the signs the scan tells (registration/facing.hpp
-// orient_along_skins: facing the viewpoint within 45 deg, or grown along the skin from such a
-// point), for a points-only scan of a solid; empty otherwise (the scan's normals, or a surface).
+// orient_fit_points_along_skins: facing the viewpoint within 45 deg, or grown along the skin from
+// such a point, on a sample finer than the sheet where the fit voxels are not), for a points-only
+// scan of a solid; empty otherwise (the scan's normals, or a surface).
 SkinNormals skin_normals(const PointCloud& scan, const PartModel& model,
-                         const PointCloud& fit_points, const std::vector<Vec3>& fit_normals,
-                         const Vec3& viewpoint) {
+                         const ReductionOutcome& reduced, const std::vector<Vec3>& fit_normals,
+                         const Vec3& viewpoint, int threads) {
   if (!normals_of(scan).empty() || fit_normals.empty()) return {};
   double thickness = std::numeric_limits<double>::infinity();
   for (const Flange& f : model.segmentation.flanges)
     if (f.thickness_mm > 0.0) thickness = std::min(thickness, f.thickness_mm);
-  return orient_along_skins(fit_points.points, fit_normals, viewpoint, 0.5 * thickness);
+  return orient_fit_points_along_skins(scan.points, reduced.scan_for_fit.points, fit_normals,
+                                       reduced.voxel_size_mm, viewpoint, thickness, threads);
 }
 
 // The rule before the signs were grown: the fit points whose estimated normal faces the
@@ -585,7 +587,7 @@ Expected<InspectionOutcome> run_inspection(const PartModel& model, const PointCl
   const SurfaceDistance* exact_updates =
       samples_biased_at_bends(model, model_tree) ? model.distance.get() : nullptr;
   const SkinNormals skins =
-      skin_normals(scan, model, reduced->scan_for_fit, *fit_normals, config->normals.viewpoint);
+      skin_normals(scan, model, *reduced, *fit_normals, config->normals.viewpoint, config->threads);
   const SkinNormals facing =
       viewpoint_facing(skins, reduced->scan_for_fit, *fit_normals, config->normals.viewpoint);
   const ExactUpdatePoints exact = exact_updates

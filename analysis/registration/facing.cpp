@@ -6,6 +6,10 @@
 #include <limits>
 #include <queue>
 
+#include "analysis/core/parallel.hpp"
+#include "analysis/preprocess/normals.hpp"
+#include "analysis/preprocess/voxel.hpp"
+
 namespace springscan::analysis {
 
 std::optional<Neighbor> nearest_facing(const KdTree& tree, const std::vector<Vec3>& normals,
@@ -82,6 +86,30 @@ constexpr double kMinParallel = 0.5;                         // a step between n
 // 9,514 fit points wrong, its frame 1.40 mm off; 5 wrong and 0.08 mm with this rule).
 constexpr double kMinFlatSeed = 0.86602540378443865;  // cos 30 deg
 
+// The scan points the finer sample of orient_fit_points_along_skins is taken from, at most.
+constexpr std::size_t kFineScanPoints = 200'000;
+
+// Every point's kSkinNeighbours nearest (itself included), found once for the normals' estimate
+// and the growth: point i's are index[i * kSkinNeighbours, + count[i]).
+struct NeighbourGraph {
+  std::vector<std::uint32_t> index;
+  std::vector<std::uint8_t> count;
+
+  const std::uint32_t* of(std::size_t i) const { return index.data() + i * kSkinNeighbours; }
+};
+
+NeighbourGraph nearest_neighbours(const KdTree& tree, int threads) {
+  const std::size_t n = tree.size();
+  NeighbourGraph g{std::vector<std::uint32_t>(n * kSkinNeighbours), std::vector<std::uint8_t>(n)};
+  parallel_blocks(n, threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    std::array<double, kSkinNeighbours> d2{};
+    for (std::size_t i = begin; i < end; ++i)
+      g.count[i] = static_cast<std::uint8_t>(tree.knn(
+          tree.points()[i], kSkinNeighbours, g.index.data() + i * kSkinNeighbours, d2.data()));
+  });
+  return g;
+}
+
 // A step of the growth: to point `to` from an oriented point, at cost 1 - |n_from . n_to|.
 struct SkinStep {
   double cost;
@@ -89,21 +117,17 @@ struct SkinStep {
   bool operator>(const SkinStep& o) const { return cost > o.cost; }
 };
 
-}  // namespace
-
-SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
-                               const Vec3& viewpoint, double max_off_skin_mm) {
+// orient_along_skins over a neighbour graph of `points`.
+SkinNormals grow_along_skins(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                             const NeighbourGraph& graph, const Vec3& viewpoint,
+                             double max_off_skin_mm) {
   SkinNormals out{normals, std::vector<std::uint8_t>(points.size(), 0)};
-  if (points.empty() || normals.size() != points.size()) return out;
-  const KdTree tree(points);
   std::priority_queue<SkinStep, std::vector<SkinStep>, std::greater<>> steps;
-  std::array<std::uint32_t, kSkinNeighbours> nn{};
-  std::array<double, kSkinNeighbours> d2{};
   const auto push_neighbours = [&](std::uint32_t i) {
     const Vec3& p = points[i];
     const Vec3& n = out.normals[i];
-    const std::size_t found = tree.knn(p, kSkinNeighbours, nn.data(), d2.data());
-    for (std::size_t j = 0; j < found; ++j) {
+    const std::uint32_t* nn = graph.of(i);
+    for (std::size_t j = 0; j < graph.count[i]; ++j) {
       const std::uint32_t q = nn[j];
       const Vec3& m = out.normals[q];
       if (out.known[q] || m.isZero()) continue;
@@ -117,8 +141,8 @@ SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vecto
     }
   };
   const auto neighbours_within = [&](std::size_t i, double min_dot) {
-    const std::size_t found = tree.knn(points[i], kSkinNeighbours, nn.data(), d2.data());
-    for (std::size_t j = 0; j < found; ++j)
+    const std::uint32_t* nn = graph.of(i);
+    for (std::size_t j = 0; j < graph.count[i]; ++j)
       if (std::abs(normals[nn[j]].dot(normals[i])) < min_dot) return false;
     return true;
   };
@@ -152,6 +176,81 @@ SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vecto
       push_neighbours(i);
     }
     grow();
+  }
+  return out;
+}
+
+// The least-squares plane normal of every point of `points` over its graph neighbours, turned
+// toward `viewpoint` (preprocess/normals.hpp estimate_normals, on the neighbours found once).
+std::vector<Vec3> graph_normals(const std::vector<Vec3>& points, const NeighbourGraph& graph,
+                                const Vec3& viewpoint, int threads) {
+  std::vector<Vec3> normals(points.size(), Vec3::Zero());
+  parallel_blocks(points.size(), threads, [&](std::size_t, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      Vec3 n;
+      double variation = 0.0;
+      if (!fit_plane(points, graph.of(i), graph.count[i], n, variation)) continue;
+      normals[i] = n.dot(viewpoint - points[i]) < 0.0 ? Vec3(-n) : n;
+    }
+  });
+  return normals;
+}
+
+// The sign of fit point `p`'s normal `n` that the signed fine points within `radius_mm` agree
+// on: +1 or -1, 0 when none is parallel to it or they disagree (both skins near it).
+int agreed_sign(const KdTree& fine_tree, const SkinNormals& fine, const Vec3& p, const Vec3& n,
+                double radius_mm, std::vector<Neighbor>& near) {
+  fine_tree.radius(p, radius_mm, near);
+  bool along = false, against = false;
+  for (const Neighbor& nb : near) {
+    if (!fine.known[nb.index]) continue;
+    const double c = fine.normals[nb.index].dot(n);
+    along = along || c >= kMinParallel;
+    against = against || c <= -kMinParallel;
+  }
+  return along == against ? 0 : (along ? 1 : -1);
+}
+
+}  // namespace
+
+SkinNormals orient_along_skins(const std::vector<Vec3>& points, const std::vector<Vec3>& normals,
+                               const Vec3& viewpoint, double max_off_skin_mm) {
+  if (points.empty() || normals.size() != points.size())
+    return SkinNormals{normals, std::vector<std::uint8_t>(points.size(), 0)};
+  const KdTree tree(points);
+  return grow_along_skins(points, normals, nearest_neighbours(tree, 1), viewpoint, max_off_skin_mm);
+}
+
+SkinNormals orient_fit_points_along_skins(const std::vector<Vec3>& scan_points,
+                                          const std::vector<Vec3>& fit_points,
+                                          const std::vector<Vec3>& fit_normals, double fit_voxel_mm,
+                                          const Vec3& viewpoint, double thickness_mm, int threads) {
+  const double half_sheet = 0.5 * thickness_mm;
+  if (!(fit_voxel_mm > half_sheet))
+    return orient_along_skins(fit_points, fit_normals, viewpoint, half_sheet);
+  SkinNormals out{fit_normals, std::vector<std::uint8_t>(fit_points.size(), 0)};
+  if (fit_points.empty() || fit_normals.size() != fit_points.size()) return out;
+  // The fine sample: one centroid per cube of half the sheet, whose diagonal (0.87 of the sheet)
+  // cannot reach from one skin to the other; of at most kFineScanPoints of the scan, evenly
+  // strided (a 1M-point scan's voxels are filled as well by a fifth of it).
+  PointCloud scan;
+  scan.points = scan_points.size() > kFineScanPoints ? strided_sample(scan_points, kFineScanPoints)
+                                                     : scan_points;
+  auto fine = voxel_reduce(scan, VoxelSettings{half_sheet});
+  if (!fine) return out;
+  const std::vector<Vec3>& points = fine->cloud.points;
+  const KdTree fine_tree(points);
+  const NeighbourGraph graph = nearest_neighbours(fine_tree, threads);
+  const SkinNormals signed_fine = grow_along_skins(
+      points, graph_normals(points, graph, viewpoint, threads), graph, viewpoint, half_sheet);
+  std::vector<Neighbor> near;
+  for (std::size_t i = 0; i < fit_points.size(); ++i) {
+    if (fit_normals[i].isZero()) continue;
+    const int sign = agreed_sign(fine_tree, signed_fine, fit_points[i], fit_normals[i],
+                                 0.5 * fit_voxel_mm, near);
+    if (sign == 0) continue;
+    out.known[i] = 1;
+    if (sign < 0) out.normals[i] = -fit_normals[i];
   }
   return out;
 }
