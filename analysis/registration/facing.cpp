@@ -86,9 +86,6 @@ constexpr double kMinParallel = 0.5;                         // a step between n
 // 9,514 fit points wrong, its frame 1.40 mm off; 5 wrong and 0.08 mm with this rule).
 constexpr double kMinFlatSeed = 0.86602540378443865;  // cos 30 deg
 
-// The scan points the finer sample of orient_fit_points_along_skins is taken from, at most.
-constexpr std::size_t kFineScanPoints = 200'000;
-
 // Every point's kSkinNeighbours nearest (itself included), found once for the normals' estimate
 // and the growth: point i's are index[i * kSkinNeighbours, + count[i]).
 struct NeighbourGraph {
@@ -231,11 +228,10 @@ SkinNormals orient_fit_points_along_skins(const std::vector<Vec3>& scan_points,
   SkinNormals out{fit_normals, std::vector<std::uint8_t>(fit_points.size(), 0)};
   if (fit_points.empty() || fit_normals.size() != fit_points.size()) return out;
   // The fine sample: one centroid per cube of half the sheet, whose diagonal (0.87 of the sheet)
-  // cannot reach from one skin to the other; of at most kFineScanPoints of the scan, evenly
-  // strided (a 1M-point scan's voxels are filled as well by a fifth of it).
+  // cannot reach from one skin to the other; of the whole scan (of a strided half, the front
+  // panel's frame was 0.23 mm off again: sparser cubes, noisier normals).
   PointCloud scan;
-  scan.points = scan_points.size() > kFineScanPoints ? strided_sample(scan_points, kFineScanPoints)
-                                                     : scan_points;
+  scan.points = scan_points;
   auto fine = voxel_reduce(scan, VoxelSettings{half_sheet});
   if (!fine) return out;
   const std::vector<Vec3>& points = fine->cloud.points;
