@@ -371,6 +371,18 @@ Outcome run_case(const ProductionCase& c, const parts::CadPart& cad, const CaseD
       testing::datum_frame_error(testing::from_row_major(al.transform()) * T_scan_part, points);
   std::tie(out.floor_rotation_deg, out.floor_shift_mm) =
       testing::datum_noise_floor(al, ds.datums, points);
+  if (std::getenv("SPRINGSCAN_DATUM_DIAG")) {
+    const Transform back =
+        T_scan_part.inverse() * testing::from_row_major(al.transform()).inverse();
+    for (const auto& d : al.datums()) {
+      const Vec3 m(d.measured().x(), d.measured().y(), d.measured().z());
+      const Vec3 n(d.nominal().x(), d.nominal().y(), d.nominal().z());
+      const Vec3 e = back * m - n;
+      std::printf("DIAG %s %s err (%.4f %.4f %.4f) pts %ld rms %.4f diam %.4f\n", d.name().c_str(),
+                  d.measured_by().c_str(), e.x(), e.y(), e.z(), static_cast<long>(d.points()),
+                  d.fit_rms_mm(), d.measured_diameter_mm());
+    }
+  }
   for (const auto& d : al.datums())
     out.measured_by += (out.measured_by.empty() ? "" : ", ") + d.name() + " " + d.measured_by() +
                        " (" + std::to_string(d.points()) + ")";
@@ -395,6 +407,8 @@ TEST_P(DatumProductionPart, FrameWithinBoundsOfTheConstruction) {
   };
   std::vector<Condition> conditions = {{false, false}, {true, true}, {true, false}, {false, true}};
   if (testing::kUnderSanitizer) conditions.resize(1);
+  if (const char* only = std::getenv("SPRINGSCAN_DATUM_CONDITION"))
+    conditions = {conditions[std::strtoul(only, nullptr, 10)]};
   unsigned seed = 100 + 10 * static_cast<unsigned>(cd.root) + static_cast<unsigned>(c.pins);
   // SPRINGSCAN_DATUM_SEED: every condition's draws from that seed (the held-out runs).
   const char* held_out = std::getenv("SPRINGSCAN_DATUM_SEED");

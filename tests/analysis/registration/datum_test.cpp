@@ -503,6 +503,22 @@ TEST(DatumAlignment, UnmeasurableDatumIsNamedAndTheFrameIsTheBestFit) {
   EXPECT_TRUE(r->datums.empty());
 }
 
+// A pad named on the skin the scanner does not see (the plate's bottom, z = -2, normal -z; the
+// scan has the top skin and the walls only): it cannot be measured, is named with why, and the
+// frame stays the best fit, as for a datum out of the scan.
+TEST(DatumAlignment, PadOnTheUnseenSkinIsNamedAndTheFrameIsTheBestFit) {
+  const Case c = scan_case(plate(), 7);
+  DatumAlignmentSettings s = three_two_one();
+  s.datums[1].point = Vec3(90.0, 10.0, -kThickness);
+  s.datums[1].normal = -Vec3::UnitZ();
+  auto r = align_to_datums(c.scan, c.normals, c.best, plate_model(), s);
+  ASSERT_TRUE(r) << r.message();
+  EXPECT_FALSE(r->achieved);
+  EXPECT_EQ(r->failed_datum, "A2");
+  EXPECT_NE(r->failure.find("'A2' (pad) cannot be measured"), std::string::npos) << r->failure;
+  EXPECT_TRUE(r->T_cad_scan.isApprox(c.best));
+}
+
 TEST(DatumAlignment, SettingsNameWhatIsWrong) {
   DatumAlignmentSettings s = three_two_one();
   s.datums.pop_back();  // nothing fixes the rotation about z
