@@ -3,10 +3,12 @@
 // its U, and the coverage table per kind of value and family.
 //
 //   ./build/bench/uncertainty_sweep --seed S [--cases N] [--production N] [--points P]
+//                                   [--views MASK]
 //
 // --cases profile cases per profile family (clean, noisy, curled wall, short flange);
 // --production cases per production family (sigma 0.02; 0.05 with 2 % outliers; one-sided view;
-// from below).
+// from below); --views which of those four production views to run, a bit each (1 two passes,
+// 2 sigma 0.05, 4 one-sided, 8 from below; default 15: all; a subset draws other parts and poses).
 // Exit 1 on a crash only: the table is for the docs and for CI's log.
 #include <cstdio>
 #include <cstdlib>
@@ -21,10 +23,10 @@ namespace {
 
 using parts::testing::production_parts;  // the shared CAD folder's production parts
 
-int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
-  std::printf("uncertainty_sweep --seed %llu --cases %d --production %d --points %lld\n",
+int run(std::uint64_t seed, int cases, int production, std::int64_t points, int views) {
+  std::printf("uncertainty_sweep --seed %llu --cases %d --production %d --points %lld --views %d\n",
               static_cast<unsigned long long>(seed), cases, production,
-              static_cast<long long>(points));
+              static_cast<long long>(points), views);
   std::mt19937_64 rng(seed);
   testing::CoverageStudy study;
   int crashes = 0;
@@ -39,6 +41,7 @@ int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
       }
   for (int k = 0; k < production; ++k)
     for (int variant = 0; variant < 4; ++variant) try {
+        if (!(views & (1 << variant))) continue;
         const std::string& part = production_parts()[rng() % production_parts().size()];
         using testing::ProductionView;
         const ProductionView view = variant == 2   ? ProductionView::kOneSided
@@ -65,7 +68,7 @@ int run(std::uint64_t seed, int cases, int production, std::int64_t points) {
 
 int main(int argc, char** argv) {
   std::uint64_t seed = 1;
-  int cases = 6, production = 4;
+  int cases = 6, production = 4, views = 15;
   std::int64_t points = 200'000;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -78,10 +81,12 @@ int main(int argc, char** argv) {
       production = std::atoi(argv[++i]);
     } else if (arg == "--points" && has_value) {
       points = std::atoll(argv[++i]);
+    } else if (arg == "--views" && has_value) {
+      views = std::atoi(argv[++i]);
     } else {
       std::fprintf(stderr,
                    "usage: uncertainty_sweep [--seed S] [--cases N] [--production N] "
-                   "[--points P]\n");
+                   "[--points P] [--views MASK]\n");
       return 2;
     }
   }
@@ -89,5 +94,5 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "uncertainty_sweep: --cases, --production >= 0 and --points >= 4000\n");
     return 2;
   }
-  return springscan::analysis::run(seed, cases, production, points);
+  return springscan::analysis::run(seed, cases, production, points, views);
 }

@@ -104,13 +104,22 @@ std::string shape_cells(const v1::Segment& segment) {
          "</td>";
 }
 
+// An edge's U: in plane and across each its own (a report written before they were split: the
+// one U of both).
+std::string edge_uncertainty(const v1::EdgeDeviation& e) {
+  if (e.in_plane_uncertainty_mm() > 0.0 || e.across_uncertainty_mm() > 0.0)
+    return ", U " + fixed(e.in_plane_uncertainty_mm(), 2) + " in-plane, " +
+           fixed(e.across_uncertainty_mm(), 2) + " across";
+  return e.uncertainty_mm() > 0.0 ? ", U " + fixed(e.uncertainty_mm(), 2) : "";
+}
+
 // One trim edge against the CAD edge: mean along the sheet and across it, with their ranges.
 std::string edge_line(const v1::EdgeDeviation& e) {
   return escape_html(e.kind().empty() ? "free" : e.kind()) + " edge: in-plane " +
          signed_fixed(e.in_plane_mean(), 2) + " (" + signed_fixed(e.in_plane_min(), 2) + " to " +
          signed_fixed(e.in_plane_max(), 2) + "), across " + signed_fixed(e.across_mean(), 2) +
          " (" + signed_fixed(e.across_min(), 2) + " to " + signed_fixed(e.across_max(), 2) + ")" +
-         (e.uncertainty_mm() > 0.0 ? ", U " + fixed(e.uncertainty_mm(), 2) : "");
+         edge_uncertainty(e);
 }
 
 // The flange's measured trim edges, one line each (a report written before trim_edges: its

@@ -143,11 +143,18 @@ FlangeVerdict judge_flange(const FlangeShapeSummary& f, const VerdictSettings& s
   };
   if (s.max_edge_deviation_mm > 0.0) {
     for (const EdgeSummary& e : f.edges) {
-      const double value = std::max(std::abs(e.in_plane_mm), std::abs(e.across_mm));
-      const Conformity c = judge_at_most(value, e.uncertainty_mm, s.max_edge_deviation_mm, rule);
-      note(c, name + " " + e.kind + " edge off by " + fixed2(e.in_plane_mm) + " mm in-plane, " +
-                  fixed2(e.across_mm) + " mm across (" + with_u(e.uncertainty_mm) + " mm; " +
-                  relation(c, "limit") + " " + fixed2(s.max_edge_deviation_mm) + " mm)");
+      // The limit reads the larger move: each move against it with its own U (both within by
+      // more than their U conforms; either beyond by more than its U does not).
+      const double u_in =
+          e.in_plane_uncertainty_mm > 0.0 ? e.in_plane_uncertainty_mm : e.uncertainty_mm;
+      const double u_across =
+          e.across_uncertainty_mm > 0.0 ? e.across_uncertainty_mm : e.uncertainty_mm;
+      const double limit = s.max_edge_deviation_mm;
+      const Conformity c = worst(judge_at_most(std::abs(e.in_plane_mm), u_in, limit, rule),
+                                 judge_at_most(std::abs(e.across_mm), u_across, limit, rule));
+      note(c, name + " " + e.kind + " edge off by " + fixed2(e.in_plane_mm) + " mm in-plane (" +
+                  with_u(u_in) + " mm), " + fixed2(e.across_mm) + " mm across (" +
+                  with_u(u_across) + " mm; " + relation(c, "limit") + " " + fixed2(limit) + " mm)");
     }
   }
   if (s.max_flatness_mm > 0.0) {
@@ -216,7 +223,8 @@ std::vector<FlangeShapeSummary> flange_shapes(const std::vector<FlangeFit>& flan
     for (const EdgeDeviation& e : f.trim_edges)
       summary.edges.push_back({std::string(edge_kind_name(e.kind)),
                                larger(e.in_plane_min_mm, e.in_plane_max_mm),
-                               larger(e.across_min_mm, e.across_max_mm), e.uncertainty_mm});
+                               larger(e.across_min_mm, e.across_max_mm), e.uncertainty_mm,
+                               e.in_plane_uncertainty_mm, e.across_uncertainty_mm});
     out.push_back(std::move(summary));
   }
   return out;

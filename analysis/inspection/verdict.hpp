@@ -76,6 +76,8 @@ struct EdgeSummary {
   double in_plane_mm = 0.0;     ///< its in-plane move of largest magnitude (signed)
   double across_mm = 0.0;       ///< its move across of largest magnitude (signed)
   double uncertainty_mm = 0.0;  ///< expanded U (k = 2) of the larger of the two
+  /// Each move's own U (k = 2); 0: uncertainty_mm stands for both.
+  double in_plane_uncertainty_mm = 0.0, across_uncertainty_mm = 0.0;
 };
 
 /// What the shape rules need of one flange (springback stage, FlangeFit::shape).

@@ -24,6 +24,8 @@ void edge_to_proto(const EdgeDeviation& e, v1::EdgeDeviation& out) {
   to_proto(e.outward, *out.mutable_outward());
   out.set_length_mm(e.length_mm);
   out.set_uncertainty_mm(e.uncertainty_mm);
+  out.set_in_plane_uncertainty_mm(e.in_plane_uncertainty_mm);
+  out.set_across_uncertainty_mm(e.across_uncertainty_mm);
   for (const Vec3& p : e.cad_edge) to_proto(p, *out.add_cad_edge());
   for (const Vec3& p : e.scan_edge) to_proto(p, *out.add_scan_edge());
 }

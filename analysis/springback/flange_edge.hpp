@@ -63,7 +63,9 @@ struct EdgeDeviation {
   /// At each strip's centre, in the frame of the scan points given (the result frame): where
   /// the CAD edge is and where the scan's edge is. The report draws them on the deviation map.
   std::vector<Vec3> cad_edge, scan_edge;
-  /// Expanded (k = 2) of its largest |in-plane| or |across| move (docs/uncertainty.md).
+  /// Expanded (k = 2) of its in-plane and across moves, each with the result frame's move at
+  /// the edge along that direction (docs/uncertainty.md); uncertainty_mm the larger of the two.
+  double in_plane_uncertainty_mm = 0.0, across_uncertainty_mm = 0.0;
   double uncertainty_mm = 0.0;
 };
 

@@ -448,15 +448,15 @@ double edge_line_sigma(const FlangeBudget& f, const EdgeDeviation& e) {
   return std::min(f.spacing_mm, 2.0 * f.spacing_mm * f.spacing_mm / e.length_mm);
 }
 
-// The result frame's largest move at an edge's strips, in plane (outward) or across (standard).
-double edge_frame_sigma(const FrameUncertainty* frame, const EdgeDeviation& e) {
-  if (!frame) return 0.0;
-  const Vec3 across = e.direction.cross(e.outward);
+// The result frame's largest move at an edge's strips along `direction` (standard): in plane
+// (outward) or across. Each direction its own: a frame that turns a flange about its normal
+// moves its edges in plane and not across.
+double edge_frame_sigma(const FrameUncertainty* frame, const EdgeDeviation& e,
+                        const Vec3& direction) {
+  if (!frame || !(direction.norm() > 1e-9)) return 0.0;
   double worst = 0.0;
   for (const Vec3& c : e.cad_edge)
-    worst =
-        std::max({worst, frame_point_sigma(*frame, c, e.outward),
-                  across.norm() > 1e-9 ? frame_point_sigma(*frame, c, across.normalized()) : 0.0});
+    worst = std::max(worst, frame_point_sigma(*frame, c, direction.normalized()));
   return worst;
 }
 
@@ -480,10 +480,14 @@ void attach_uncertainty(const UncertaintyResult& u, SpringbackResult& sb,
     flange.shape.flatness_uncertainty_mm = k * u.flanges[f].flatness_mm;
     if (flange.shape.curled)
       flange.shape.curl_radius_uncertainty_mm = k * u.flanges[f].curl_radius_mm;
-    for (EdgeDeviation& e : flange.trim_edges)
-      if (e.measured)
-        e.uncertainty_mm = k * rss({u.flanges[f].edge_mm, edge_line_sigma(u.flanges[f], e),
-                                    edge_frame_sigma(frame, e)});
+    for (EdgeDeviation& e : flange.trim_edges) {
+      if (!e.measured) continue;
+      const double own = rss({u.flanges[f].edge_mm, edge_line_sigma(u.flanges[f], e)});
+      e.in_plane_uncertainty_mm = k * rss({own, edge_frame_sigma(frame, e, e.outward)});
+      e.across_uncertainty_mm =
+          k * rss({own, edge_frame_sigma(frame, e, e.direction.cross(e.outward))});
+      e.uncertainty_mm = std::max(e.in_plane_uncertainty_mm, e.across_uncertainty_mm);
+    }
   }
 }
 

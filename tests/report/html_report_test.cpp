@@ -219,6 +219,23 @@ TEST(HtmlReportAlone, UndecidedShowsValuesWithTheirUAndEachDecision) {
   EXPECT_NE(html->find("Decided by the simple rule"), std::string::npos);
 }
 
+// A trim edge's U (issue 41): in plane and across each its own; a report written before they
+// were split shows its one U.
+TEST(HtmlReportAlone, ShowsEachEdgeMovesOwnU) {
+  auto f = testing::make_fixture(0);
+  v1::EdgeDeviation* edge = f.report.mutable_segments(0)->mutable_trim_edges(0);
+  edge->set_uncertainty_mm(0.3);
+  auto html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("across -0.52 (-0.55 to -0.49), U 0.30<"), std::string::npos);
+  edge->set_in_plane_uncertainty_mm(0.3);
+  edge->set_across_uncertainty_mm(0.04);
+  html = render_report_html(f.report, {});
+  ASSERT_TRUE(html.ok()) << html.message();
+  EXPECT_NE(html->find("across -0.52 (-0.55 to -0.49), U 0.30 in-plane, 0.04 across<"),
+            std::string::npos);
+}
+
 // The result frame's U beside the global fit's figures (issue 41): rotation and translation, each
 // with its unit; n/a where the report has none.
 TEST(HtmlReportAlone, ShowsTheResultFramesUncertainty) {

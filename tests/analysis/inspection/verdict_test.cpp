@@ -238,15 +238,15 @@ TEST(Verdict, ShapeRulesAreOffByDefaultAndNameTheirNumbers) {
   VerdictSettings edge;
   edge.max_edge_deviation_mm = 0.5;
   EXPECT_TRUE(has_reason(decide_verdict(in, edge),
-                         "flange 0 free edge off by 0.31 mm in-plane, -0.52 mm across (U 0.000 mm; "
-                         "limit 0.50 mm)"));
+                         "flange 0 free edge off by 0.31 mm in-plane (U 0.000 mm), -0.52 mm across "
+                         "(U 0.000 mm; limit 0.50 mm)"));
   EXPECT_FALSE(has_reason(decide_verdict(in, edge), "side edge"));
   edge.max_edge_deviation_mm = 0.6;
   EXPECT_TRUE(decide_verdict(in, edge).pass);
   edge.max_edge_deviation_mm = 0.15;
   EXPECT_TRUE(has_reason(decide_verdict(in, edge),
-                         "flange 0 side edge off by -0.12 mm in-plane, 0.20 mm across (U 0.000 mm; "
-                         "limit 0.15 mm)"));
+                         "flange 0 side edge off by -0.12 mm in-plane (U 0.000 mm), 0.20 mm across "
+                         "(U 0.000 mm; limit 0.15 mm)"));
   // Within the limits: no reason.
   s.max_angle_spread_deg = 0.9;
   s.min_curl_radius_mm = 150.0;
@@ -345,8 +345,8 @@ TEST(Verdict, ShapeCriteriaUseTheirUncertainties) {
   EXPECT_TRUE(has_reason(v, "flange 0 flatness 0.95 mm (U 0.100 mm) undecided"));
   EXPECT_TRUE(has_reason(v, "flange 0 curl radius -240.00 mm (U 30.000 mm) undecided"));
   EXPECT_TRUE(has_reason(v,
-                         "flange 0 free edge off by 0.31 mm in-plane, -0.52 mm across "
-                         "(U 0.050 mm; undecided, within U of 0.50 mm)"));
+                         "flange 0 free edge off by 0.31 mm in-plane (U 0.050 mm), -0.52 mm "
+                         "across (U 0.050 mm; undecided, within U of 0.50 mm)"));
   EXPECT_EQ(v.decision, PartDecision::kUndecided);
   // Tighter limits put each beyond its U: nonconforming.
   s.max_angle_spread_deg = 0.7;
@@ -363,6 +363,28 @@ TEST(Verdict, ShapeCriteriaUseTheirUncertainties) {
   v = decide_verdict(in, s);
   EXPECT_EQ(v.flanges[0].shape_decision, Conformity::kConforming);
   EXPECT_EQ(v.decision, PartDecision::kPass) << testing::PrintToString(v.reasons);
+}
+
+// A trim edge's limit reads its larger move; each move is placed against it with its own U (the
+// result frame moves an edge in plane and across by different amounts).
+TEST(Verdict, EachEdgeMoveMeetsTheLimitWithItsOwnU) {
+  VerdictInput in = good_input();
+  in.flanges = {{.flange_id = 0, .measured = true, .flatness_mm = 0.1}};
+  const VerdictSettings s{.max_edge_deviation_mm = 0.5};
+  // In plane 0.45 + 0.02 and across 0.10 + 0.30, both within 0.5: conforming. With the larger
+  // U for both, 0.45 + 0.30 would straddle the limit.
+  in.flanges[0].edges = {{"free", 0.45, 0.10, 0.30, 0.02, 0.30}};
+  EXPECT_EQ(decide_verdict(in, s).flanges[0].shape_decision, Conformity::kConforming);
+  in.flanges[0].edges = {{"free", 0.45, 0.10, 0.30, 0.30, 0.30}};
+  EXPECT_EQ(decide_verdict(in, s).flanges[0].shape_decision, Conformity::kUndecided);
+  // Across 0.62 beyond by more than its own U of 0.1: nonconforming whatever the in-plane U.
+  in.flanges[0].edges = {{"free", 0.10, -0.62, 0.30, 0.30, 0.10}};
+  const VerdictResult v = decide_verdict(in, s);
+  EXPECT_EQ(v.flanges[0].shape_decision, Conformity::kNonconforming);
+  EXPECT_TRUE(has_reason(v,
+                         "flange 0 free edge off by 0.10 mm in-plane (U 0.300 mm), -0.62 mm "
+                         "across (U 0.100 mm; limit 0.50 mm)"))
+      << testing::PrintToString(v.reasons);
 }
 
 // Parts with one borderline bend (true springback within +-0.1 deg of its 1.0 deg tolerance)

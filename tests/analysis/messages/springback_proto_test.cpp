@@ -93,6 +93,17 @@ TEST(SpringbackProto, ReportHoldsTheShapeFigures) {
   EXPECT_NEAR(report.segments(2).edge_deviation_mm().in_plane_mean(),
               (produced->back().end - nominal_end.end).dot(out), 0.05);
   EXPECT_FALSE(report.segments(1).has_edge_deviation_mm());
+  // Each edge move's U (the uncertainty stage's) reaches the report, the free edge's in both.
+  SpringbackResult with_u = *result;
+  ASSERT_FALSE(with_u.flanges[2].trim_edges.empty());
+  for (EdgeDeviation& e : with_u.flanges[2].trim_edges)
+    e.in_plane_uncertainty_mm = 0.3, e.across_uncertainty_mm = 0.04, e.uncertainty_mm = 0.3;
+  v1::InspectionReport report_u;
+  fill_springback_report(with_u, report_u);
+  EXPECT_EQ(report_u.segments(2).edge_deviation_mm().in_plane_uncertainty_mm(), 0.3);
+  EXPECT_EQ(report_u.segments(2).edge_deviation_mm().across_uncertainty_mm(), 0.04);
+  EXPECT_EQ(report_u.segments(2).trim_edges(0).across_uncertainty_mm(), 0.04);
+  EXPECT_EQ(report_u.segments(2).trim_edges(0).uncertainty_mm(), 0.3);
   // Every trim edge is listed, the free edge among them with the same figures.
   const auto& trim = report.segments(2).trim_edges();
   const auto free = std::find_if(trim.begin(), trim.end(),

@@ -291,8 +291,9 @@ inline void run_production_case(const std::string& part, double noise_mm, Produc
         const int face = cad.model.samples.face_ids[samples.nearest(c)->index];
         const Vec3 truth = run.T_truth_part * produced->produced(c, face);
         out.push_back(
-            {"edge in plane", family, (m - truth).dot(outward), e.uncertainty_mm(), note});
-        out.push_back({"edge across", family, (m - truth).dot(normal), e.uncertainty_mm(), note});
+            {"edge in plane", family, (m - truth).dot(outward), e.in_plane_uncertainty_mm(), note});
+        out.push_back(
+            {"edge across", family, (m - truth).dot(normal), e.across_uncertainty_mm(), note});
       }
     }
 }

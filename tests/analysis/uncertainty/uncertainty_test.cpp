@@ -184,6 +184,46 @@ TEST(FrameUncertainty, TheDepartureCountsByWhatItDoesToTheRotation) {
   EXPECT_LE(sb.rotation_deg, 3.0 * 2.4 * turn) << "padded";
 }
 
+// A trim edge's two U's, each with the result frame's move along its own direction: a frame
+// uncertain only in its turn about the flange's normal moves the edge in plane (by the turn times
+// the distance from the centre), not across; a translation across moves it across only.
+TEST(EdgeUncertainty, EachMoveTakesTheFramesMoveAlongItsOwnDirection) {
+  SpringbackResult sb;
+  sb.flanges.resize(1);
+  sb.flanges[0].shape.measured = true;
+  EdgeDeviation e;
+  e.measured = true;
+  e.direction = Vec3::UnitX();  // the edge along x at y = 50 in the flange z = 0
+  e.outward = Vec3::UnitY();
+  e.length_mm = 100.0;
+  e.cad_edge = {Vec3(10, 50, 0), Vec3(50, 50, 0), Vec3(90, 50, 0)};
+  sb.flanges[0].trim_edges = {e};
+  UncertaintyResult u;
+  u.flanges.resize(1);
+  u.flanges[0].edge_mm = 0.01;
+  u.flanges[0].spacing_mm = 0.1;  // its line's own error: min(0.1, 2 0.01 / 100) = 2e-4
+  FrameUncertainty frame;
+  frame.pairs = 100;
+  frame.covariance(2, 2) = 1e-6;  // 1 mrad (standard) about z through the origin
+  attach_uncertainty(u, sb, &frame);
+  const EdgeDeviation& out = sb.flanges[0].trim_edges[0];
+  const double own2 = 0.01 * 0.01 + 2e-4 * 2e-4;
+  // The farthest strip centre, 90 mm from the axis, moves 0.09 mm outward.
+  EXPECT_NEAR(out.in_plane_uncertainty_mm, 2.0 * std::sqrt(own2 + 0.09 * 0.09), 1e-9);
+  EXPECT_NEAR(out.across_uncertainty_mm, 2.0 * std::sqrt(own2), 1e-9);
+  EXPECT_EQ(out.uncertainty_mm, out.in_plane_uncertainty_mm);
+  // A translation along z (0.05 mm standard) alone: across, not in plane.
+  frame.covariance.setZero();
+  frame.covariance(5, 5) = 0.05 * 0.05;
+  sb.flanges[0].trim_edges = {e};
+  attach_uncertainty(u, sb, &frame);
+  EXPECT_NEAR(sb.flanges[0].trim_edges[0].in_plane_uncertainty_mm, 2.0 * std::sqrt(own2), 1e-9);
+  EXPECT_NEAR(sb.flanges[0].trim_edges[0].across_uncertainty_mm,
+              2.0 * std::sqrt(own2 + 0.05 * 0.05), 1e-9);
+  EXPECT_EQ(sb.flanges[0].trim_edges[0].uncertainty_mm,
+            sb.flanges[0].trim_edges[0].across_uncertainty_mm);
+}
+
 // The distances' own noise from consecutive neighbours (a scanner's line order), on a surface
 // whose deviation varies slowly; points in no order tell nothing.
 TEST(NeighbourNoise, IsTheNoiseOfTheDistancesAlongTheScansLines) {
