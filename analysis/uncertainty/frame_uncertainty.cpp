@@ -85,6 +85,12 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   std::vector<double> residuals;
   rows.reserve(points.size());
   residuals.reserve(points.size());
+  // The same pairs to the surface itself (below): the nearest tangent plane of the nearest
+  // samples, for the covariance and the departed pairs' move.
+  std::vector<Vec6> surface_rows;
+  std::vector<double> surface_residuals;
+  constexpr std::size_t kSurfaceCandidates = 6;
+  const double on_surface_mm = 2.0 * std::max(st.scanner_sigma_mm, 0.01);
   // At most kMaxPairs pairs, evenly through the points: J^T J of all of them is `stride` x that
   // of every stride-th (the covariance's scale is set back below).
   constexpr std::size_t kMaxPairs = 10000;
@@ -98,6 +104,28 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
     j << (p - c).cross(n), n;
     rows.push_back(j);
     residuals.push_back(n.dot(p - tree.points()[nn->index]));
+    // The surface's own residual: of the 6 nearest samples, the one whose tangent plane the
+    // point lies nearest. A sheet thinner than the samples' spacing pairs a point with the
+    // other face's sample (its residual the thickness: 0.7 mm on the side panel seen from
+    // below, robust scale 0.45-0.75 mm at a noise of 0.02) where its own face's lies a little
+    // farther to the side; the best fit, on the exact surface, does not see those, and their
+    // move when left out turned the frame's U by 0.01-0.04 deg (development seeds). Only where
+    // the nearest sample's plane lies off the point beyond the noise (the queries' cost: most
+    // pairs are on their own face).
+    double best = residuals.back();
+    Vec6 best_row = j;
+    std::uint32_t idx[kSurfaceCandidates];
+    double d2[kSurfaceCandidates];
+    const std::size_t found =
+        std::abs(best) > on_surface_mm ? tree.knn(p, kSurfaceCandidates, idx, d2) : 0;
+    for (std::size_t q = 0; q < found; ++q) {
+      if (d2[q] > pair_distance_mm * pair_distance_mm) break;
+      const Vec3& nq = normals[idx[q]];
+      const double r = nq.dot(p - tree.points()[idx[q]]);
+      if (std::abs(r) < std::abs(best)) best = r, best_row << (p - c).cross(nq), nq;
+    }
+    surface_rows.push_back(best_row);
+    surface_residuals.push_back(best);
   }
   out.pairs = rows.size();
   if (out.pairs < 6) return out;
@@ -119,9 +147,18 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   const std::size_t kept = std::max<std::size_t>(1, magnitude.size() * 95 / 100);
   for (std::size_t i = 0; i < kept; ++i) sum2 += magnitude[i] * magnitude[i];
   const double departure_mm = std::sqrt(sum2 / static_cast<double>(kept));
+  // The covariance from the fit's scatter about the surface itself (the surface pairs): the
+  // departure above keeps the nearest sample's residual (what the fit's pairing sees).
+  {
+    std::vector<double> own(surface_residuals.size());
+    for (std::size_t i = 0; i < own.size(); ++i) own[i] = std::abs(surface_residuals[i]);
+    std::nth_element(own.begin(), own.begin() + static_cast<long>(own.size() / 2), own.end());
+    out.sigma_mm = std::max(1.4826 * own[own.size() / 2], st.scanner_sigma_mm);
+  }
   Mat6 normal = Mat6::Zero();
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    if (std::abs(residuals[i]) <= 3.0 * out.sigma_mm) normal += rows[i] * rows[i].transpose();
+  for (std::size_t i = 0; i < surface_rows.size(); ++i)
+    if (std::abs(surface_residuals[i]) <= 3.0 * out.sigma_mm)
+      normal += surface_rows[i] * surface_rows[i].transpose();
   normal *= static_cast<double>(stride);
   // Rotation scaled by the points' size, so that the eigenvalues compare.
   const double radius = std::max(0.5 * (hi - lo).norm(), 1.0);
@@ -147,9 +184,9 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   // registration/boundary.hpp free_eigenvalue_ratio) is placed by the part's ends: there the
   // covariance of a few points (a hole's wall, an edge-on wall) does not tell, the ends do.
   Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < rows.size(); ++i)
-    if (std::abs(residuals[i]) <= 3.0 * out.sigma_mm)
-      info += rows[i].tail<3>() * rows[i].tail<3>().transpose();
+  for (std::size_t i = 0; i < surface_rows.size(); ++i)
+    if (std::abs(surface_residuals[i]) <= 3.0 * out.sigma_mm)
+      info += surface_rows[i].tail<3>() * surface_rows[i].tail<3>().transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> moves(info);
   constexpr double kWeakTranslationRatio = 2e-2;  // as free_eigenvalue_ratio's default
   for (int k = 0; k < 3; ++k) {
@@ -198,12 +235,20 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   // part: the development seeds' sprung nema brackets turned 0.16-0.35 deg at 1.2-2.3x this
   // move, the panels 0.002-0.04 deg where the departure over the half-diagonal said
   // 0.07-0.18 (docs/uncertainty.md).
+  std::vector<double> surface_magnitude(surface_residuals.size());
+  for (std::size_t i = 0; i < surface_residuals.size(); ++i)
+    surface_magnitude[i] = std::abs(surface_residuals[i]);
+  std::sort(surface_magnitude.begin(), surface_magnitude.end());
+  const auto surface_rank = [&](double share) {
+    return surface_magnitude[std::min(
+        surface_magnitude.size() - 1,
+        static_cast<std::size_t>(share * static_cast<double>(surface_magnitude.size())))];
+  };
+  const double surface_trim = surface_rank(0.99);
   Vec6 departed = Vec6::Zero();
   for (const double share : {0.80, 0.90, 0.95}) {
-    const double cut = magnitude[std::min(
-        magnitude.size() - 1,
-        static_cast<std::size_t>(share * static_cast<double>(magnitude.size())))];
-    const Vec6 move = departed_move(rows, residuals, scale, cut, trim);
+    const Vec6 move =
+        departed_move(surface_rows, surface_residuals, scale, surface_rank(share), surface_trim);
     if (move.head<3>().norm() > departed.head<3>().norm()) departed = move;
   }
   constexpr double kDepartedFactor = 1.2;

@@ -184,6 +184,37 @@ TEST(FrameUncertainty, TheDepartureCountsByWhatItDoesToTheRotation) {
   EXPECT_LE(sb.rotation_deg, 3.0 * 2.4 * turn) << "padded";
 }
 
+// A sheet 0.7 mm thick seen from below, its faces sampled 1.35 mm apart (the top face's samples
+// offset by half a spacing on the right half): a bottom point in the middle of its face's cell
+// there lies nearer the top face's sample above it than its own face's. The pairs to the
+// surface itself take its own face's plane: the scan lies on its CAD, and the frame's U stays
+// that of the noise, not a turn of the right half's 0.7 mm pairs.
+TEST(FrameUncertainty, PairsOfAThinSheetTakeTheirOwnFace) {
+  std::vector<Vec3> samples, normals, points;
+  constexpr double kSpacing = 1.35, kThickness = 0.7;
+  for (int i = 0; i * kSpacing <= 100.0; ++i)
+    for (int j = 0; j * kSpacing <= 40.0; ++j) {
+      const double x = i * kSpacing, y = j * kSpacing;
+      samples.emplace_back(x, y, 0.0), normals.push_back(-Vec3::UnitZ());
+      const double shift = x >= 50.0 ? 0.5 * kSpacing : 0.0;
+      samples.emplace_back(x + shift, y + shift, kThickness), normals.push_back(Vec3::UnitZ());
+    }
+  for (double x = 1.0; x <= 99.0; x += 0.3)
+    for (double y = 1.0; y <= 39.0; y += 0.3) points.emplace_back(x, y, 0.0);
+  const KdTree tree(samples);
+  // The construction does what it says: some right-half points' nearest sample is the top's.
+  std::size_t other_face = 0;
+  for (const Vec3& p : points) other_face += normals[tree.nearest(p)->index].z() > 0.0;
+  ASSERT_GT(other_face, points.size() / 20);
+  UncertaintySettings st;
+  st.scanner_sigma_mm = 0.02;
+  const FrameUncertainty frame = frame_uncertainty(points, tree, normals, st);
+  ASSERT_GE(frame.pairs, 6u);
+  EXPECT_NEAR(frame.sigma_mm, 0.02, 1e-9);
+  // The noise's turn over a 100 x 40 mm face from thousands of pairs: thousandths of a degree.
+  EXPECT_LT(frame.rotation_deg, 0.005);
+}
+
 // A trim edge's two U's, each with the result frame's move along its own direction: a frame
 // uncertain only in its turn about the flange's normal moves the edge in plane (by the turn times
 // the distance from the centre), not across; a translation across moves it across only.
