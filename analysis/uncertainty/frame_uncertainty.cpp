@@ -129,12 +129,8 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   }
   out.pairs = rows.size();
   if (out.pairs < 6) return out;
-  // A robust scale (1.4826 MAD): the pairs include springback's own deviations and outliers.
   std::vector<double> magnitude(residuals.size());
   for (std::size_t i = 0; i < residuals.size(); ++i) magnitude[i] = std::abs(residuals[i]);
-  std::nth_element(magnitude.begin(), magnitude.begin() + static_cast<long>(magnitude.size() / 2),
-                   magnitude.end());
-  out.sigma_mm = std::max(1.4826 * magnitude[magnitude.size() / 2], st.scanner_sigma_mm);
   // The part's departure from the CAD (springback, curl: the pairs' rms with the farthest 5 %
   // left out): the best fit of a deformed part moves with what of it the scan sees and the fit
   // keeps, by about that much (the method's error, u = d). The noise is not taken off: the
@@ -147,14 +143,15 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   const std::size_t kept = std::max<std::size_t>(1, magnitude.size() * 95 / 100);
   for (std::size_t i = 0; i < kept; ++i) sum2 += magnitude[i] * magnitude[i];
   const double departure_mm = std::sqrt(sum2 / static_cast<double>(kept));
-  // The covariance from the fit's scatter about the surface itself (the surface pairs): the
+  // The covariance from the fit's scatter about the surface itself (the surface pairs), at a
+  // robust scale (1.4826 MAD: the pairs include springback's own deviations and outliers); the
   // departure above keeps the nearest sample's residual (what the fit's pairing sees).
-  {
-    std::vector<double> own(surface_residuals.size());
-    for (std::size_t i = 0; i < own.size(); ++i) own[i] = std::abs(surface_residuals[i]);
-    std::nth_element(own.begin(), own.begin() + static_cast<long>(own.size() / 2), own.end());
-    out.sigma_mm = std::max(1.4826 * own[own.size() / 2], st.scanner_sigma_mm);
-  }
+  std::vector<double> surface_magnitude(surface_residuals.size());
+  for (std::size_t i = 0; i < surface_residuals.size(); ++i)
+    surface_magnitude[i] = std::abs(surface_residuals[i]);
+  std::sort(surface_magnitude.begin(), surface_magnitude.end());
+  out.sigma_mm =
+      std::max(1.4826 * surface_magnitude[surface_magnitude.size() / 2], st.scanner_sigma_mm);
   Mat6 normal = Mat6::Zero();
   for (std::size_t i = 0; i < surface_rows.size(); ++i)
     if (std::abs(surface_residuals[i]) <= 3.0 * out.sigma_mm)
@@ -235,10 +232,6 @@ FrameUncertainty frame_uncertainty(const std::vector<Vec3>& points, const KdTree
   // part: the development seeds' sprung nema brackets turned 0.16-0.35 deg at 1.2-2.3x this
   // move, the panels 0.002-0.04 deg where the departure over the half-diagonal said
   // 0.07-0.18 (docs/uncertainty.md).
-  std::vector<double> surface_magnitude(surface_residuals.size());
-  for (std::size_t i = 0; i < surface_residuals.size(); ++i)
-    surface_magnitude[i] = std::abs(surface_residuals[i]);
-  std::sort(surface_magnitude.begin(), surface_magnitude.end());
   const auto surface_rank = [&](double share) {
     return surface_magnitude[std::min(
         surface_magnitude.size() - 1,
